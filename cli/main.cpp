@@ -1,0 +1,36 @@
+// `hmc`: the command line over libhmc. Parses arguments, runs one subcommand, and turns every
+// outcome into an exit code in this one place (docs/cli.md lists them).
+#include <iostream>
+
+#include <CLI/CLI.hpp>
+
+#include "exit_codes.h"
+#include "frame_command.h"
+
+#ifndef HMC_VERSION
+#error "HMC_VERSION must be defined by the build"
+#endif
+
+int main(int argc, char** argv) {
+  CLI::App app{"hmc: tools for the Hybrid Motor Controller board (steppers, servos, LED strips)", "hmc"};
+  app.set_version_flag("--version", std::string("hmc ") + HMC_VERSION);
+  app.require_subcommand(1);
+  app.footer(
+      "Examples:\n"
+      "  hmc frame encode STM 1 1 128 1000 500     # -> STX#6#STM#1#1#128#1000#500#94#ETX\n"
+      "  hmc frame encode '[#SVM#1#135]'           # spec's command-set notation\n"
+      "  hmc frame decode 'STX#6#STM#3#1#1#11#1000#238#ETX'\n"
+      "  hmc frame check frames.txt                # one verdict per line\n"
+      "\n"
+      "Exit codes: 0 ok, 1 refused/invalid frame, 2 usage error, 3 file or port error.");
+
+  int exit_code = hmc::cli::kExitOk;
+  hmc::cli::add_frame_command(app, exit_code);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? hmc::cli::kExitOk : hmc::cli::kExitUsage;
+  }
+  return exit_code;
+}

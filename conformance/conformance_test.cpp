@@ -1,0 +1,240 @@
+// The conformance runner: plays every vector in conformance/vectors/ against the firmware's
+// FrameParser (byte by byte) and the host codec (line splitter + decode), and fails naming the
+// vector and both verdicts when either parser disagrees with the vector or with the other.
+// conformance/README.md defines the vector format.
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/frame_parser.h"
+#include "hmc/codec.h"
+#include "hmc/command_json.h"
+#include "hmc/line_splitter.h"
+
+namespace {
+
+using nlohmann::json;
+namespace proto = hmc::proto;
+
+// A verdict in the vector's own terms, so the vector and both parsers compare field by field.
+json fw_command_json(const hmc::fw::Command& c) {
+  const proto::CommandSpec& spec = proto::command_spec(c.id);
+  uint32_t v[proto::kMaxValues] = {};
+  switch (c.id) {
+    case proto::CommandId::kStepper:
+      v[0] = c.stepper.motor, v[1] = c.stepper.dir, v[2] = c.stepper.microstep, v[3] = c.stepper.steps,
+      v[4] = c.stepper.delay_us;
+      break;
+    case proto::CommandId::kServo: v[0] = c.servo.servo, v[1] = c.servo.angle; break;
+    case proto::CommandId::kLed: v[0] = c.led.strip, v[1] = c.led.r, v[2] = c.led.g, v[3] = c.led.b, v[4] = c.led.w; break;
+  }
+  json out = {{"name", spec.name}};
+  for (uint32_t i = 0; i < spec.value_count; ++i) out[spec.fields[i].name] = v[i];
+  return out;
+}
+
+json refused_json(proto::Reason reason, std::optional<int> token, std::size_t offset, uint32_t expected, uint32_t found) {
+  return {{"verdict", "refused"},
+          {"reason", proto::reason_spec(reason).name},
+          {"token", token ? json(*token) : json(nullptr)},
+          {"offset", offset},
+          {"expected", expected},
+          {"found", found}};
+}
+
+json fw_verdict_json(const hmc::fw::Verdict& v) {
+  if (v.reason == proto::Reason::kOk) return {{"verdict", "accepted"}, {"command", fw_command_json(v.command)}};
+  std::optional<int> token;
+  if (v.token != proto::kNoToken) token = v.token;
+  return refused_json(v.reason, token, v.offset, v.expected, v.found);
+}
+
+json host_verdict_json(const hmc::Result<hmc::Decoded, hmc::Diagnostic>& r) {
+  if (r) return {{"verdict", "accepted"}, {"command", hmc::command_to_json(r->command)}};
+  const hmc::Diagnostic& d = r.error();
+  std::optional<int> token;
+  if (d.token != hmc::kNoToken) token = d.token;
+  return refused_json(d.reason, token, d.offset, d.expected, d.found);
+}
+
+// The vector's expectation reduced to what a parser verdict holds (absent expected/found are 0).
+json expected_verdict(const json& e) {
+  if (e.at("verdict") == "accepted") return {{"verdict", "accepted"}, {"command", e.at("command")}};
+  if (e.at("verdict") == "ignored") return {{"verdict", "ignored"}};
+  return {{"verdict", "refused"},
+          {"reason", e.at("reason")},
+          {"token", e.at("token")},
+          {"offset", e.at("offset")},
+          {"expected", e.value("expected", 0)},
+          {"found", e.value("found", 0)}};
+}
+
+// Each code point U+0000..U+00FF of the JSON string is one byte.
+std::string bytes_of(const std::string& utf8) {
+  std::string out;
+  for (std::size_t i = 0; i < utf8.size(); ++i) {
+    const auto c = static_cast<unsigned char>(utf8[i]);
+    if (c < 0x80) {
+      out += static_cast<char>(c);
+    } else if ((c & 0xE0) == 0xC0 && i + 1 < utf8.size() && c <= 0xC3) {
+      out += static_cast<char>(((c & 0x1F) << 6) | (static_cast<unsigned char>(utf8[++i]) & 0x3F));
+    } else {
+      throw std::runtime_error("vector input has a code point above U+00FF");
+    }
+  }
+  return out;
+}
+
+std::vector<json> firmware_verdicts(const std::string& stream) {
+  hmc::fw::FrameParser parser;
+  std::vector<json> out;
+  for (char c : stream) {
+    if (parser.feed(static_cast<uint8_t>(c))) out.push_back(fw_verdict_json(parser.verdict()));
+  }
+  return out;
+}
+
+// The host's verdicts for a stream delivered in two reads split at `cut`.
+std::vector<json> host_verdicts(const std::string& stream, std::size_t cut) {
+  hmc::LineSplitter splitter;
+  std::vector<json> out;
+  auto drain = [&] {
+    while (auto line = splitter.next()) out.push_back(host_verdict_json(hmc::decode(line->text)));
+  };
+  splitter.feed(std::string_view(stream).substr(0, cut));
+  drain();
+  splitter.feed(std::string_view(stream).substr(cut));
+  drain();
+  return out;  // no finish(): like the board, a line without its end has no verdict yet
+}
+
+json as_list(const std::vector<json>& verdicts) {
+  if (verdicts.empty()) return json::array({{{"verdict", "ignored"}}});
+  return verdicts;
+}
+
+struct Tally {
+  int vectors = 0, firmware_ok = 0, host_ok = 0, agree = 0;
+};
+
+// Checks one vector; returns the mismatches found, each a line of text.
+std::vector<std::string> check_vector(const json& vector, Tally& tally) {
+  std::vector<std::string> problems;
+  const std::string id = vector.at("id");
+  const std::string kind = vector.at("kind");
+  const std::string input = bytes_of(vector.at("input"));
+  const json& expect = vector.at("expect");
+
+  json want;
+  if (kind == "line") {
+    want = json::array({expected_verdict(expect)});
+  } else {
+    want = json::array();
+    for (const json& e : expect) want.push_back(expected_verdict(e));
+    if (want.empty()) want.push_back({{"verdict", "ignored"}});
+  }
+  const std::string stream = kind == "line" ? input + "\n" : input;
+  const json fw = as_list(firmware_verdicts(stream));
+  const json host = as_list(host_verdicts(stream, stream.size()));
+
+  ++tally.vectors;
+  tally.firmware_ok += fw == want;
+  tally.host_ok += host == want;
+  tally.agree += fw == host;
+  if (fw != want || host != want) {
+    problems.push_back(id + ": expected " + want.dump() + "\n    firmware: " + fw.dump() + "\n    host:     " + host.dump());
+  }
+  for (std::size_t cut = 0; cut < stream.size() && kind == "stream"; ++cut) {
+    if (as_list(host_verdicts(stream, cut)) != host) problems.push_back(id + ": host verdicts change when the stream is split at byte " + std::to_string(cut));
+  }
+
+  // The host alone: canonical form, re-encoding and lint of accepted lines.
+  if (kind == "line" && expect.at("verdict") == "accepted") {
+    const auto decoded = hmc::decode(input);
+    if (decoded) {
+      const std::string again = hmc::encode(decoded->command).value();
+      if (decoded->canonical != expect.at("canonical").get<bool>()) {
+        problems.push_back(id + ": host says canonical=" + std::to_string(decoded->canonical));
+      }
+      if (expect.at("canonical").get<bool>() && again != input) {
+        problems.push_back(id + ": encode(decode(input)) gave " + again);
+      }
+      if (!(hmc::decode(again).ok() && hmc::decode(again)->command == decoded->command)) {
+        problems.push_back(id + ": the canonical form " + again + " does not decode to the same command");
+      }
+      std::vector<std::string> warned;
+      for (const auto& w : decoded->warnings) warned.push_back(w.field);
+      if (json(warned) != expect.value("warnings", json::array())) {
+        problems.push_back(id + ": host warns about " + json(warned).dump());
+      }
+    }
+  }
+  if (vector.contains("as_input")) {
+    const json& a = vector.at("as_input");
+    const auto typed = hmc::parse_input(input);
+    if (a.at("verdict") == "accepted") {
+      if (!typed) {
+        problems.push_back(id + ": as input, refused: " + typed.error().message);
+      } else {
+        if (hmc::command_to_json(*typed) != a.at("command")) problems.push_back(id + ": as input, gave " + hmc::command_to_json(*typed).dump());
+        if (hmc::encode(*typed).value() != a.at("frame")) problems.push_back(id + ": as input, framed as " + hmc::encode(*typed).value());
+      }
+    } else if (typed || proto::reason_spec(typed.error().reason).name != a.at("reason")) {
+      problems.push_back(id + ": as input, expected refusal " + a.at("reason").dump() + ", got " +
+                         (typed ? std::string("acceptance") : typed.error().message));
+    }
+  }
+  return problems;
+}
+
+json load(const std::string& name) {
+  std::ifstream in(std::filesystem::path(HMC_VECTORS_DIR) / name);
+  REQUIRE(in.good());
+  return json::parse(in);
+}
+
+void run_file(const std::string& name, std::size_t minimum_vectors) {
+  const json file = load(name);
+  const json& vectors = file.at("vectors");
+  CHECK(vectors.size() >= minimum_vectors);
+  Tally tally;
+  for (const json& v : vectors) {
+    const std::vector<std::string> problems = check_vector(v, tally);
+    if (problems.empty()) SUCCEED(v.at("id").get<std::string>());
+    for (const std::string& problem : problems) FAIL_CHECK(problem);
+  }
+  std::cout << name << ": " << tally.vectors << " vectors; firmware parser matches " << tally.firmware_ok
+            << ", host codec matches " << tally.host_ok << ", parsers agree on " << tally.agree << "\n";
+}
+
+}  // namespace
+
+TEST_CASE("vector ids are unique across all files") {
+  std::set<std::string> ids;
+  for (const auto& entry : std::filesystem::directory_iterator(HMC_VECTORS_DIR)) {
+    for (const json& v : load(entry.path().filename().string()).at("vectors")) {
+      INFO(v.at("id"));
+      CHECK(ids.insert(v.at("id").get<std::string>()).second);
+    }
+  }
+}
+
+TEST_CASE("spec examples: every frame printed in the spec") {
+  const json file = load("spec_examples.json");
+  int frames = 0, notation = 0;
+  for (const json& v : file.at("vectors")) {
+    (v.contains("as_input") ? notation : frames) += 1;
+  }
+  CHECK(frames == 28);
+  CHECK(notation == 4);
+  run_file("spec_examples.json", 32);
+}
+
+TEST_CASE("edge cases: our decisions on the spec's quirks") { run_file("edge_cases.json", 80); }

@@ -1,0 +1,76 @@
+// FrameParser: the firmware's byte-at-a-time reader of command frames (docs/protocol.md).
+//
+// Bytes go in one at a time as the UART delivers them. At every line end the parser gives one
+// verdict for the line: an accepted, typed Command, or a refusal with its reason, the token and
+// byte offset it concerns, and expected/found values. Blank lines give no verdict. Whatever
+// went wrong, the next line is parsed from a clean state.
+//
+// Freestanding: no heap, no exceptions, no library strings. The line buffer is
+// proto::kLineMax (128) bytes, the longest frame the grammar allows plus room for blanks; see
+// protocol_facts.h for the arithmetic. Longer lines are refused as line_too_long.
+#pragma once
+
+#include <stdint.h>
+
+#include "protocol_facts.h"
+
+namespace hmc::fw {
+
+struct StepperCommand {
+  uint8_t motor;       // 1..3
+  uint8_t dir;         // proto::kActionStop / Forward / Reverse / Home
+  uint32_t microstep;  // as received (not checked on stop)
+  uint32_t steps;
+  uint32_t delay_us;
+};
+
+struct ServoCommand {
+  uint8_t servo;  // 1 pan, 2 tilt
+  uint8_t angle;  // 10..170 degrees
+};
+
+struct LedCommand {
+  uint8_t strip;  // 1..2
+  uint8_t r, g, b, w;
+};
+
+struct Command {
+  proto::CommandId id;
+  union {
+    StepperCommand stepper;
+    ServoCommand servo;
+    LedCommand led;
+  };
+};
+
+struct Verdict {
+  proto::Reason reason;  // kOk: accepted and `command` holds it; otherwise refused
+  uint8_t token;         // token index the refusal concerns, proto::kNoToken for none
+  uint8_t offset;        // byte offset in the line, leading blanks included
+  uint32_t expected;     // checksum_mismatch / bad_length; 0 otherwise
+  uint32_t found;        // checksum_mismatch / bad_length / out_of_range; 0 otherwise
+  Command command;       // valid only when reason == kOk
+};
+
+class FrameParser {
+ public:
+  FrameParser();
+
+  // Takes the next byte of the stream. Returns true when it ended a non-blank line; the
+  // line's verdict is then in verdict() until the next call.
+  bool feed(uint8_t byte);
+
+  // The verdict of the line feed() last completed.
+  const Verdict& verdict() const { return verdict_; }
+
+  // Judges one line (terminator excluded) of any length. Returns false for a blank line, which
+  // gets no verdict. feed() uses this at every line end; tests and fuzzers may call it directly.
+  static bool parse_line(const uint8_t* line, uint32_t length, Verdict& out);
+
+ private:
+  uint8_t line_[proto::kLineMax];
+  uint32_t length_;   // bytes received on the current line, counting those not stored
+  Verdict verdict_;
+};
+
+}  // namespace hmc::fw

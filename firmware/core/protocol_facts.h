@@ -1,0 +1,180 @@
+// The protocol's facts, written once: frame limits, command names, fields, value ranges,
+// the spec's advised ranges, board facts the grammar depends on, and the refusal reasons.
+//
+// Read by the firmware's FrameParser, the host codec, the docs test and the conformance
+// runner. Each of those applies these facts with its own algorithm; nothing here parses.
+// Freestanding: no heap, no library beyond <stdint.h>.
+#pragma once
+
+#include <stdint.h>
+
+namespace hmc::proto {
+
+// ---------------------------------------------------------------------------------------
+// Frame limits (docs/protocol.md, "Lines" and "Numbers")
+
+// Largest number a field may hold: the spec's INT_MAX.
+inline constexpr uint32_t kIntMax = 2147483647u;
+// Most digits a number may have (leading zeros count).
+inline constexpr uint32_t kMaxDigits = 10;
+// Most bytes on one line, its terminator excluded. The longest frame the grammar allows for a
+// command of kMaxValues values, every number written with kMaxDigits digits, is
+// 4 (STX#) + 11 (len#) + 4 (name#) + 9 * 11 (values#, checksum#) + 3 (ETX) = 121 bytes;
+// 128 holds that with room for surrounding blanks and is one power of two of RAM.
+inline constexpr uint32_t kLineMax = 128;
+// Most values after the command name any command has (STM has 5).
+inline constexpr uint32_t kMaxValues = 8;
+// The checksum field's largest value.
+inline constexpr uint32_t kChecksumMax = 255;
+// Token positions that do not depend on the command.
+inline constexpr uint8_t kTokenStart = 0;
+inline constexpr uint8_t kTokenLength = 1;
+inline constexpr uint8_t kTokenName = 2;
+inline constexpr uint8_t kTokenFirstValue = 3;
+// Marks "no token" in a verdict (line too long).
+inline constexpr uint8_t kNoToken = 0xFF;
+
+// ---------------------------------------------------------------------------------------
+// Refusal reasons. Numbers are stable: they are the reply codes of protocol v2.
+
+enum class Reason : uint8_t {
+  kOk = 0,
+  kLineTooLong = 1,       // more than kLineMax bytes before the line end
+  kBadByte = 2,           // a byte outside '!'..'~' inside the frame
+  kBadStart = 3,          // the frame does not begin with the token STX
+  kBadEnd = 4,            // the frame does not end with the token ETX
+  kBadLength = 5,         // the length field disagrees with the fields present or the command
+  kBadNumber = 6,         // a numeric field is not 1-10 decimal digits up to kIntMax
+  kUnknownCommand = 7,    // the name is not in the command table
+  kChecksumMismatch = 8,  // the checksum field is not the sum of the values mod 256
+  kOutOfRange = 9,        // a value is outside its field's range
+  kNoSwitch = 10,         // homing asked of a motor that has no limit switch
+};
+
+struct ReasonSpec {
+  Reason reason;
+  const char* name;  // stable identifier used in vectors, JSON output and docs
+  const char* text;  // what it means, for people
+};
+
+inline constexpr ReasonSpec kReasons[] = {
+    {Reason::kOk, "ok", "accepted"},
+    {Reason::kLineTooLong, "line_too_long", "line is longer than 128 bytes"},
+    {Reason::kBadByte, "bad_byte", "byte that cannot appear inside a frame"},
+    {Reason::kBadStart, "bad_start", "frame does not start with STX"},
+    {Reason::kBadEnd, "bad_end", "frame does not end with ETX"},
+    {Reason::kBadLength, "bad_length", "length field does not match the fields"},
+    {Reason::kBadNumber, "bad_number", "field is not an unsigned decimal number"},
+    {Reason::kUnknownCommand, "unknown_command", "unknown command name"},
+    {Reason::kChecksumMismatch, "checksum_mismatch", "checksum does not match the values"},
+    {Reason::kOutOfRange, "out_of_range", "value outside the field's range"},
+    {Reason::kNoSwitch, "no_switch", "motor has no limit switch to home against"},
+};
+inline constexpr uint32_t kReasonCount = sizeof(kReasons) / sizeof(kReasons[0]);
+
+// The entry for a reason; reasons are numbered densely from 0, so this is an index.
+constexpr const ReasonSpec& reason_spec(Reason r) { return kReasons[static_cast<uint8_t>(r)]; }
+
+constexpr bool reasons_indexed_by_code() {
+  for (uint32_t i = 0; i < kReasonCount; ++i) {
+    if (static_cast<uint32_t>(kReasons[i].reason) != i) return false;
+  }
+  return true;
+}
+static_assert(reasons_indexed_by_code(), "kReasons[i] must describe reason code i");
+
+// ---------------------------------------------------------------------------------------
+// Board facts the grammar depends on
+
+inline constexpr uint32_t kMotorCount = 3;
+inline constexpr uint32_t kServoCount = 2;
+inline constexpr uint32_t kStripCount = 2;
+// Motors 1 and 2 each have two limit switches; motor 3 has none (seed 003, 개요; DESIGN).
+constexpr bool motor_has_switches(uint32_t motor) { return motor == 1 || motor == 2; }
+
+// STM's action field (its second value).
+inline constexpr uint32_t kActionStop = 0;
+inline constexpr uint32_t kActionForward = 1;
+inline constexpr uint32_t kActionReverse = 2;
+inline constexpr uint32_t kActionHome = 3;
+
+// ---------------------------------------------------------------------------------------
+// Commands and their fields
+
+enum class CommandId : uint8_t { kStepper, kServo, kLed };
+
+enum FieldFlag : uint8_t {
+  kPowerOfTwo = 1u << 0,        // a non-zero value must be a power of two
+  kUncheckedOnStop = 1u << 1,   // not checked at all when the action is stop
+  kZeroAllowedOnHome = 1u << 2, // 0 is also accepted when the action is home
+};
+
+struct FieldSpec {
+  const char* name;      // identifier in JSON, vectors and messages
+  uint32_t min;          // smallest accepted value
+  uint32_t max;          // largest accepted value
+  uint8_t flags;         // FieldFlag bits
+  uint32_t advised_min;  // the spec's table advises [advised_min, advised_max]; the host
+  uint32_t advised_max;  // warns outside it (both 0: no advice)
+  const char* meaning;   // one line for help and docs
+};
+
+struct CommandSpec {
+  const char* name;        // case-sensitive wire name
+  CommandId id;
+  uint8_t value_count;     // values after the name; the length field is value_count + 1
+  const FieldSpec* fields; // value_count entries
+  int8_t action_field;     // index of the stop/move/home field, or -1
+  const char* summary;
+};
+
+inline constexpr FieldSpec kStepperFields[] = {
+    {"motor", 1, kMotorCount, 0, 0, 0, "stepper 1-3"},
+    {"dir", 0, 3, 0, 0, 0, "0 stop, 1 forward, 2 reverse, 3 home"},
+    {"microstep", 1, 256, kPowerOfTwo | kUncheckedOnStop | kZeroAllowedOnHome, 0, 0,
+     "1, 2, 4 ... 256 microsteps per full step (0 when homing: keep the current one)"},
+    {"steps", 0, kIntMax, kUncheckedOnStop, 0, 0,
+     "steps to move, 0 = until stopped (homing: most steps to seek, 0 = no bound)"},
+    {"delay_us", 1, kIntMax, kUncheckedOnStop | kZeroAllowedOnHome, 100, 3000,
+     "microseconds per step (0 when homing: the default homing rate)"},
+};
+inline constexpr FieldSpec kServoFields[] = {
+    {"servo", 1, kServoCount, 0, 0, 0, "servo 1 (pan) or 2 (tilt)"},
+    {"angle", 10, 170, 0, 0, 0, "degrees, 90 is centre"},
+};
+inline constexpr FieldSpec kLedFields[] = {
+    {"strip", 1, kStripCount, 0, 0, 0, "LED strip 1 or 2"},
+    {"r", 0, 255, 0, 0, 0, "red"},
+    {"g", 0, 255, 0, 0, 0, "green"},
+    {"b", 0, 255, 0, 0, 0, "blue"},
+    {"w", 0, 255, 0, 0, 0, "white"},
+};
+
+inline constexpr CommandSpec kCommands[] = {
+    {"STM", CommandId::kStepper, 5, kStepperFields, 1, "stepper: move, run, stop or home"},
+    {"SVM", CommandId::kServo, 2, kServoFields, -1, "servo: go to an angle"},
+    {"LED", CommandId::kLed, 5, kLedFields, -1, "LED strip: set one colour"},
+};
+inline constexpr uint32_t kCommandCount = sizeof(kCommands) / sizeof(kCommands[0]);
+
+// The entry for a command id; kCommands is ordered by CommandId.
+constexpr const CommandSpec& command_spec(CommandId id) { return kCommands[static_cast<uint8_t>(id)]; }
+
+constexpr bool commands_indexed_by_id() {
+  for (uint32_t i = 0; i < kCommandCount; ++i) {
+    if (static_cast<uint32_t>(kCommands[i].id) != i) return false;
+  }
+  return true;
+}
+static_assert(commands_indexed_by_id(), "kCommands[i] must describe CommandId i");
+
+constexpr bool is_power_of_two(uint32_t v) { return v != 0 && (v & (v - 1)) == 0; }
+
+static_assert(kStepperFields[1].max == kActionHome, "STM's action field spans stop..home");
+static_assert(sizeof(kStepperFields) / sizeof(kStepperFields[0]) == 5, "STM has 5 values");
+static_assert(sizeof(kServoFields) / sizeof(kServoFields[0]) == 2, "SVM has 2 values");
+static_assert(sizeof(kLedFields) / sizeof(kLedFields[0]) == 5, "LED has 5 values");
+static_assert(4 + 11 + 4 + (kMaxValues + 1) * 11 + 3 <= kLineMax,
+              "the line buffer holds the longest frame the grammar allows");
+
+}  // namespace hmc::proto
