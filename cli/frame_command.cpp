@@ -17,26 +17,29 @@ namespace hmc::cli {
 namespace {
 
 struct FrameOptions {
-  std::vector<std::string> words;
-  std::vector<std::string> frames;
+  std::string first;                // a command name, a frame or notation; kept whole
+  std::vector<std::string> values;  // the values after a command name
+  std::string frame;
   std::string file;
   bool json = false;
   bool quiet = false;
 };
 
-// A single word that looks like a frame or notation is parsed as one; otherwise NAME v1 ... vn.
-Result<Command, Diagnostic> command_from_arguments(const std::vector<std::string>& words) {
-  if (words.size() == 1 && words[0].find('#') != std::string::npos) return parse_input(words[0]);
+// A lone argument holding '#' is a frame or notation; otherwise NAME v1 ... vn.
+Result<Command, Diagnostic> command_from_arguments(const FrameOptions& o) {
+  if (o.values.empty() && o.first.find('#') != std::string::npos) return parse_input(o.first);
+  std::vector<std::string> words{o.first};
+  words.insert(words.end(), o.values.begin(), o.values.end());
   return command_from_words(words);
 }
 
 int run_encode(const FrameOptions& o) {
-  auto command = command_from_arguments(o.words);
+  auto command = command_from_arguments(o);
   if (!command) {
     if (o.json) {
       std::cout << nlohmann::json{{"verdict", "refused"}, {"error", diagnostic_to_json(command.error())}} << "\n";
     } else {
-      print_refusal(std::cerr, o.words.size() == 1 ? o.words[0] : "", command.error());
+      print_refusal(std::cerr, o.values.empty() ? o.first : "", command.error());
     }
     return kExitInvalid;
   }
@@ -62,23 +65,19 @@ nlohmann::json verdict_json(const Result<Decoded, Diagnostic>& r) {
 }
 
 int run_decode(const FrameOptions& o) {
-  int code = kExitOk;
-  for (const std::string& frame : o.frames) {
-    const auto r = decode(frame);
-    if (!r) code = kExitInvalid;
-    if (o.json) {
-      nlohmann::json out = verdict_json(r);
-      out["input"] = frame;
-      std::cout << out.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
-    } else if (r) {
-      print_command(std::cout, r->command);
-      if (!r->canonical) std::cout << "  canonical form: " << encode(r->command).value() << "\n";
-      print_warnings(std::cout, r->warnings);
-    } else {
-      print_refusal(std::cout, frame, r.error());
-    }
+  const auto r = decode(o.frame);
+  if (o.json) {
+    nlohmann::json out = verdict_json(r);
+    out["input"] = o.frame;
+    std::cout << out.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
+  } else if (r) {
+    print_command(std::cout, r->command);
+    if (!r->canonical) std::cout << "  canonical form: " << encode(r->command).value() << "\n";
+    print_warnings(std::cout, r->warnings);
+  } else {
+    print_refusal(std::cout, o.frame, r.error());
   }
-  return code;
+  return r ? kExitOk : kExitInvalid;
 }
 
 int run_check(const FrameOptions& o) {
@@ -132,14 +131,16 @@ void add_frame_command(CLI::App& app, int& exit_code) {
   frame->require_subcommand(1);
 
   CLI::App* enc = frame->add_subcommand("encode", "Frame a command: length and checksum filled in");
-  enc->add_option("command", options->words, "NAME v1 ... vn, or '[#NAME#v1#...]', or a frame")->required();
+  enc->add_option("command", options->first, "A command name (STM, SVM, LED), '[#NAME#v1#...]' or a frame")
+      ->required();
+  enc->add_option("values", options->values, "The command's values, in wire order");
   enc->add_flag("--json", options->json, "Print JSON");
   enc->footer("Examples:\n  hmc frame encode STM 1 1 128 1000 500\n  hmc frame encode '[#SVM#1#135]'");
   enc->callback([options, &exit_code] { exit_code = run_encode(*options); });
 
-  CLI::App* dec = frame->add_subcommand("decode", "Explain frames: fields, or what is wrong and where");
-  dec->add_option("frame", options->frames, "One or more frames, e.g. 'STX#3#SVM#1#10#11#ETX'")->required();
-  dec->add_flag("--json", options->json, "Print one JSON object per frame");
+  CLI::App* dec = frame->add_subcommand("decode", "Explain a frame: its fields, or what is wrong and where");
+  dec->add_option("frame", options->frame, "A frame, e.g. 'STX#3#SVM#1#10#11#ETX'")->required();
+  dec->add_flag("--json", options->json, "Print JSON");
   dec->footer("Example:\n  hmc frame decode 'STX#6#STM#3#1#1#11#1000#238#ETX'");
   dec->callback([options, &exit_code] { exit_code = run_decode(*options); });
 

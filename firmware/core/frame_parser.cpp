@@ -179,24 +179,23 @@ bool judge_values(const uint8_t* line, const Tokens& tokens, const CommandSpec& 
   // 14. Checksum.
   if (checksum != sum) {
     return give_verdict(out, Reason::kChecksumMismatch, checksum_token, checksum_span.begin, sum,
-                  checksum);
+                        checksum);
   }
 
   // 15. Ranges, left to right.
-  const uint32_t action = command.action_field < 0
-                              ? kNoAction
-                              : values[static_cast<uint32_t>(command.action_field)];
+  const uint32_t action =
+      command.action_field < 0 ? kNoAction : values[static_cast<uint32_t>(command.action_field)];
   for (uint32_t i = 0; i < count; ++i) {
     if (!in_range(command.fields[i], values[i], action)) {
       return give_verdict(out, Reason::kOutOfRange, proto::kTokenFirstValue + i,
-                    tokens.at(proto::kTokenFirstValue + i).begin, 0, values[i]);
+                          tokens.at(proto::kTokenFirstValue + i).begin, 0, values[i]);
     }
   }
 
   // 16. Switch: what an action moves (the motor) is the first value.
   if (action == proto::kActionHome && !proto::motor_has_switches(values[0])) {
     return give_verdict(out, Reason::kNoSwitch, proto::kTokenFirstValue,
-                  tokens.at(proto::kTokenFirstValue).begin);
+                        tokens.at(proto::kTokenFirstValue).begin);
   }
 
   give_verdict(out, Reason::kOk);
@@ -277,7 +276,7 @@ bool FrameParser::parse_line(const uint8_t* line, uint32_t length, Verdict& out)
   // 9. Length agrees with the frame.
   if (declared != k - kUncountedTokens) {
     return give_verdict(out, Reason::kBadLength, proto::kTokenLength, length_span.begin, declared,
-                  k - kUncountedTokens);
+                        k - kUncountedTokens);
   }
 
   // 10. Name.
@@ -291,7 +290,7 @@ bool FrameParser::parse_line(const uint8_t* line, uint32_t length, Verdict& out)
   const uint32_t command_length = command->value_count + 1u;
   if (declared != command_length) {
     return give_verdict(out, Reason::kBadLength, proto::kTokenLength, length_span.begin,
-                  command_length, declared);
+                        command_length, declared);
   }
 
   return judge_values(line, tokens, *command, out);

@@ -118,8 +118,8 @@ TEST_CASE("servo and LED frames are accepted with their fields", "[frame_parser]
 
 TEST_CASE("every reason is reported with its token and offset", "[frame_parser]") {
   SECTION("line_too_long") {
-    check_refusal(judge(std::string(129, 'A')), Reason::kLineTooLong, hmc::proto::kNoToken, 128,
-                  0, 0);
+    check_refusal(judge(std::string(129, 'A')), Reason::kLineTooLong, hmc::proto::kNoToken, 128, 0,
+                  0);
   }
   SECTION("bad_byte") {
     require_refused("STX#3#SVM#1#\t90#91#ETX", Reason::kBadByte, 4, 12);
@@ -199,9 +199,7 @@ TEST_CASE("when two checks fail, the earlier one in the order is reported", "[fr
   SECTION("5 start before 6 end") {
     require_refused("XTX#3#SVM#1#90#91#XTX", Reason::kBadStart, 0, 0);
   }
-  SECTION("6 end before 7 room") {
-    require_refused("STX#1#XTX", Reason::kBadEnd, 2, 6);
-  }
+  SECTION("6 end before 7 room") { require_refused("STX#1#XTX", Reason::kBadEnd, 2, 6); }
   SECTION("7 room before 8 length number") {
     require_refused("STX#x#ETX", Reason::kBadLength, 1, 4);
   }
@@ -283,8 +281,7 @@ TEST_CASE("blanks around a frame are ignored but count in offsets", "[frame_pars
   require_refused("   XTX#3#SVM#1#90#91#ETX", Reason::kBadStart, 0, 3);
 }
 
-TEST_CASE("the line limit is 128 bytes, and the parser resynchronises after it",
-          "[frame_parser]") {
+TEST_CASE("the line limit is 128 bytes, and the parser resynchronises after it", "[frame_parser]") {
   SECTION("128 bytes is not too long") {
     require_servo(kServoFrame + std::string(128 - kServoFrame.size(), ' '), 1, 90);
     require_servo(std::string(128 - kServoFrame.size(), '\t') + kServoFrame, 1, 90);
@@ -400,7 +397,7 @@ TEST_CASE("random bytes always give verdicts within the protocol's bounds", "[fr
     state = state * 1664525u + 1013904223u;  // a fixed sequence, so a failure repeats
     const uint32_t roll = state >> 24;
     // Mostly frame bytes, with line ends often enough to give lines of every length.
-    const uint8_t byte = roll < 4 ? static_cast<uint8_t>('\n')
+    const uint8_t byte = roll < 4    ? static_cast<uint8_t>('\n')
                          : roll < 64 ? static_cast<uint8_t>("STX#ETXSVMLED0123456789 "[roll % 24])
                                      : static_cast<uint8_t>(state >> 16);
     if (!parser.feed(byte)) continue;

@@ -219,8 +219,10 @@ Result<Decoded, Diagnostic> decode(std::string_view line) {
   // 5. Start.
   if (tokens[0].text != kStart) {
     std::string message = "frame must start with 'STX', found " + quote(tokens[0].text);
-    if (!frame.empty() && frame.front() == '[') {
+    if (frame.rfind("[#", 0) == 0) {
       message += " (this is command-set notation, not a wire frame; `hmc frame encode` frames it)";
+    } else if (frame.rfind("[STX#", 0) == 0) {
+      message += " (the spec prints frames in brackets; the brackets are not part of the frame)";
     }
     return refuse(Reason::kBadStart, proto::kTokenStart, tokens[0].offset, "start", std::move(message));
   }
@@ -402,8 +404,8 @@ Result<Command, Diagnostic> parse_input(std::string_view text) {
   }
   if (k - 1 != spec->value_count) {
     return refuse(Reason::kBadLength, proto::kTokenLength, tokens[0].offset, "length",
-                  std::string(spec->name) + " takes " + std::to_string(spec->value_count) + " values but " +
-                      std::to_string(k - 1) + " were given",
+                  std::string(spec->name) + " takes " + std::to_string(spec->value_count) + " values, got " +
+                      std::to_string(k - 1),
                   spec->value_count, static_cast<uint32_t>(k - 1));
   }
   std::array<uint32_t, proto::kMaxValues> values{};
@@ -437,7 +439,7 @@ Result<Command, Diagnostic> command_from_words(const std::vector<std::string>& w
   if (words.size() - 1 != spec->value_count) {
     return refuse(Reason::kBadLength, proto::kTokenLength, 0, "length",
                   std::string(spec->name) + " takes " + std::to_string(spec->value_count) + " values (" + usage +
-                      ") but " + std::to_string(words.size() - 1) + " were given",
+                      "), got " + std::to_string(words.size() - 1),
                   spec->value_count, static_cast<uint32_t>(words.size() - 1));
   }
   std::array<uint32_t, proto::kMaxValues> values{};
