@@ -1,2 +1,58 @@
 #!/usr/bin/env bash
-exit 0
+# Runs the real `hmc` binary as a user would and checks its output and exit codes.
+# Usage: cli_test.sh HMC_BINARY SOURCE_DIR
+set -uo pipefail
+hmc=$1
+src=$2
+failures=0
+checks=0
+
+# expect NAME WANT_EXIT PATTERN -- COMMAND...: the command exits WANT_EXIT and its combined
+# output matches the extended regex PATTERN.
+expect() {
+  local name=$1 want_exit=$2 pattern=$3
+  shift 4
+  local out code
+  out=$("$@" 2>&1)
+  code=$?
+  checks=$((checks + 1))
+  if [[ $code -ne $want_exit ]] || ! grep -Eq -- "$pattern" <<<"$out"; then
+    failures=$((failures + 1))
+    printf 'FAIL %s: exit %s (want %s), output:\n%s\n' "$name" "$code" "$want_exit" "$out"
+  fi
+}
+
+expect encode-words 0 '^STX#6#STM#1#1#128#1000#500#94#ETX$' -- "$hmc" frame encode STM 1 1 128 1000 500
+expect encode-notation 0 '^STX#3#SVM#1#135#136#ETX$' -- "$hmc" frame encode '[#SVM#1#135]'
+expect encode-lowercase-name 0 '^STX#6#LED#1#200#120#100#20#185#ETX$' -- "$hmc" frame encode led 1 200 120 100 20
+expect encode-bad-microstep 1 'microstep is 3: expected a power of two 1-256' -- "$hmc" frame encode STM 1 1 3 1000 500
+expect encode-home-motor-3 1 'no_switch' -- "$hmc" frame encode STM 3 3 0 0 0
+expect encode-too-few 1 'SVM takes 2 values \(SVM <servo> <angle>\), got 1' -- "$hmc" frame encode SVM 1
+expect encode-warns 0 'warning: delay_us 20 is outside' -- "$hmc" frame encode STM 3 1 8 0 20
+out=$("$hmc" frame encode STM 3 1 8 0 20 2>/dev/null)
+checks=$((checks + 1))
+[[ $out == 'STX#6#STM#3#1#8#0#20#32#ETX' ]] || { failures=$((failures + 1)); echo "FAIL encode-stdout-clean: $out"; }
+expect encode-json 0 '"frame":"STX#3#SVM#2#90#92#ETX"' -- "$hmc" frame encode SVM 2 90 --json
+
+expect decode-ok 0 'stepper 1 forward 1000 steps at 1/128 step, 500 us per step' -- "$hmc" frame decode 'STX#6#STM#1#1#128#1000#500#94#ETX'
+expect decode-example-5 1 'checksum is 238 where 248 was expected' -- "$hmc" frame decode 'STX#6#STM#3#1#1#11#1000#238#ETX'
+expect decode-caret 1 '^ {26}\^ byte 24, field .checksum.' -- "$hmc" frame decode 'STX#6#STM#3#1#1#11#1000#238#ETX'
+expect decode-json 1 '"reason":"checksum_mismatch".*' -- "$hmc" frame decode --json 'STX#6#STM#3#1#1#11#1000#238#ETX'
+expect decode-notation-hint 1 'command-set notation' -- "$hmc" frame decode '[#STM#1#1#128#1000#500]'
+expect decode-canonical 0 'canonical form: STX#3#SVM#1#10#11#ETX' -- "$hmc" frame decode ' STX#03#SVM#1#10#11#ETX'
+expect decode-empty 1 'no frame on the line' -- "$hmc" frame decode ''
+
+expect check-spec 1 'spec-frames.txt:14: error: checksum_mismatch' -- "$hmc" frame check "$src/examples/spec-frames.txt"
+expect check-spec-count 1 '28 frames: 27 valid, 1 invalid' -- "$hmc" frame check "$src/examples/spec-frames.txt"
+expect check-example 0 '11 frames: 11 valid, 0 invalid' -- "$hmc" frame check "$src/examples/pan-tilt-and-lights.txt"
+expect check-stdin 1 '^-:2: error: unknown_command' -- bash -c "printf 'STX#3#SVM#1#10#11#ETX\r\nSTX#3#SVX#1#10#11#ETX\n' | '$hmc' frame check -q -"
+expect check-json 0 '"line":1' -- bash -c "echo 'STX#3#SVM#1#10#11#ETX' | '$hmc' frame check --json -"
+expect check-missing-file 3 "cannot read '/nonexistent'" -- "$hmc" frame check /nonexistent
+
+expect version 0 '^hmc [0-9]+\.[0-9]+\.[0-9]+' -- "$hmc" --version
+expect help 0 'Examples:' -- "$hmc" --help
+expect usage-error 2 'frame is required' -- "$hmc" frame decode
+expect unknown-subcommand 2 '.' -- "$hmc" frobnicate
+
+echo "$((checks - failures)) passed, $failures failed"
+[[ $failures -eq 0 ]]

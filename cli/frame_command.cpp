@@ -105,7 +105,7 @@ int run_check(const FrameOptions& o) {
         std::cout << o.file << ":" << line->number << ": ";
         print_refusal(std::cout, line->text, r.error());
       } else if (!o.quiet) {
-        std::cout << o.file << ":" << line->number << ": ok: " << describe(r->command) << "\n";
+        std::cout << o.file << ":" << line->number << ": ok: " << line->text << "  (" << describe(r->command) << ")\n";
         for (const Warning& w : r->warnings) std::cout << o.file << ":" << line->number << ": warning: " << w.message << "\n";
       }
     }

@@ -219,7 +219,8 @@ void run_file(const std::string& name, std::size_t minimum_vectors) {
 TEST_CASE("vector ids are unique across all files") {
   std::set<std::string> ids;
   for (const auto& entry : std::filesystem::directory_iterator(HMC_VECTORS_DIR)) {
-    for (const json& v : load(entry.path().filename().string()).at("vectors")) {
+    const json file = load(entry.path().filename().string());
+    for (const json& v : file.at("vectors")) {
       INFO(v.at("id"));
       CHECK(ids.insert(v.at("id").get<std::string>()).second);
     }

@@ -104,7 +104,7 @@ inline constexpr uint32_t kActionHome = 3;
 enum class CommandId : uint8_t { kStepper, kServo, kLed };
 
 enum FieldFlag : uint8_t {
-  kPowerOfTwo = 1u << 0,        // a non-zero value must be a power of two
+  kPowerOfTwo = 1u << 0,        // the value must be a power of two (0 is not one)
   kUncheckedOnStop = 1u << 1,   // not checked at all when the action is stop
   kZeroAllowedOnHome = 1u << 2, // 0 is also accepted when the action is home
 };

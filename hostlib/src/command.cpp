@@ -56,13 +56,17 @@ const proto::CommandSpec* find_command(std::string_view name) {
 
 namespace {
 
+std::string step_size(uint32_t microstep) {
+  return microstep == 1 ? "full step" : "1/" + std::to_string(microstep) + " step";
+}
+
 std::string describe_stepper(const StepperMove& s) {
   std::string who = "stepper " + std::to_string(s.motor);
   switch (s.dir) {
     case proto::kActionStop: return who + " stop";
     case proto::kActionHome: {
       std::string out = who + " home toward its limit switch";
-      out += s.microstep == 0 ? ", current microstep" : ", 1/" + std::to_string(s.microstep) + " step";
+      out += s.microstep == 0 ? ", current microstep" : ", " + step_size(s.microstep);
       out += s.delay_us == 0 ? ", default homing rate" : ", " + std::to_string(s.delay_us) + " us per step";
       if (s.steps != 0) out += ", at most " + std::to_string(s.steps) + " steps";
       return out;
@@ -71,7 +75,7 @@ std::string describe_stepper(const StepperMove& s) {
   }
   std::string out = who + (s.dir == proto::kActionForward ? " forward " : " reverse ");
   out += s.steps == 0 ? "until stopped" : std::to_string(s.steps) + (s.steps == 1 ? " step" : " steps");
-  out += " at 1/" + std::to_string(s.microstep) + " step, " + std::to_string(s.delay_us) + " us per step";
+  out += " at " + step_size(s.microstep) + ", " + std::to_string(s.delay_us) + " us per step";
   return out;
 }
 
