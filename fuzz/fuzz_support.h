@@ -53,8 +53,10 @@ inline std::string_view as_text(const uint8_t* data, std::size_t size) {
   std::abort();
 }
 
-inline void require(bool holds, const std::string& what, std::string_view input) {
-  if (!holds) fail(what, input);
+// Fails unless `holds`; `explain` builds the message only then, as checks run on every byte.
+template <typename Explain>
+void require(bool holds, Explain&& explain, std::string_view input) {
+  if (!holds) fail(explain(), input);
 }
 
 // A command as its id and its values in wire order.

@@ -41,39 +41,45 @@ void check_accepted(const hmc::fw::Verdict& verdict, std::string_view input) {
   const hmc::Command command = hmc::make_command(fw.id, fw.v);
 
   const auto frame = hmc::encode(command);
-  require(frame.ok(), "host encode refuses the accepted command " + to_string(fw) + ": " +
-                          (frame.ok() ? "" : frame.error().message), input);
+  require(frame.ok(), [&] { return "host encode refuses the accepted command " + to_string(fw) + ": " +
+                                 frame.error().message; }, input);
 
   const auto decoded = hmc::decode(*frame);
   require(decoded.ok() && hmc::fuzz::same_values(hmc::fuzz::values_of(decoded->command), fw),
-          "host decode of the re-encoded frame \"" + hmc::fuzz::escape(*frame) + "\" gives " +
-              to_string(outcome_of(decoded)) + ", firmware accepted " + to_string(fw),
+          [&] {
+            return "host decode of the re-encoded frame \"" + hmc::fuzz::escape(*frame) + "\" gives " +
+                   to_string(outcome_of(decoded)) + ", firmware accepted " + to_string(fw);
+          },
           input);
 
   hmc::fw::Verdict again{};
   const bool judged = hmc::fw::FrameParser::parse_line(reinterpret_cast<const uint8_t*>(frame->data()),
                                                         static_cast<uint32_t>(frame->size()), again);
   require(judged && outcome_of(again) == outcome_of(verdict),
-          "parse_line of the re-encoded frame \"" + hmc::fuzz::escape(*frame) + "\" gives " +
-              (judged ? to_string(outcome_of(again)) : std::string("no verdict")) + ", feed accepted " +
-              to_string(fw),
+          [&] {
+            return "parse_line of the re-encoded frame \"" + hmc::fuzz::escape(*frame) + "\" gives " +
+                   (judged ? to_string(outcome_of(again)) : std::string("no verdict")) + ", feed accepted " +
+                   to_string(fw);
+          },
           input);
 }
 
 void check_verdict(const hmc::fw::Verdict& verdict, const LineTracker& line, std::string_view input) {
   const Outcome outcome = outcome_of(verdict);
-  require(verdict.offset <= proto::kLineMax, "offset " + std::to_string(verdict.offset) + " > 128: " +
-                                                 to_string(outcome), input);
+  require(verdict.offset <= proto::kLineMax,
+          [&] { return "offset " + std::to_string(verdict.offset) + " > 128: " + to_string(outcome); }, input);
   require((verdict.token == proto::kNoToken) == (verdict.reason == proto::Reason::kLineTooLong),
-          "token none must mean line_too_long: " + to_string(outcome), input);
+          [&] { return "token none must mean line_too_long: " + to_string(outcome); }, input);
 
   // The same line judged whole; beyond the limit the parser never reads past kLineMax bytes.
   hmc::fw::Verdict whole{};
   const bool judged = hmc::fw::FrameParser::parse_line(reinterpret_cast<const uint8_t*>(line.bytes.data()),
                                                         static_cast<uint32_t>(line.length), whole);
   require(judged && outcome_of(whole) == outcome,
-          "feed gives " + to_string(outcome) + " but parse_line of the line gives " +
-              (judged ? to_string(outcome_of(whole)) : std::string("no verdict")),
+          [&] {
+            return "feed gives " + to_string(outcome) + " but parse_line of the line gives " +
+                   (judged ? to_string(outcome_of(whole)) : std::string("no verdict"));
+          },
           input);
 
   if (verdict.reason == proto::Reason::kOk) check_accepted(verdict, input);
@@ -93,14 +99,17 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     const bool line_end = byte == '\r' || byte == '\n';
     const bool judged = parser.feed(byte);
     if (!line_end) {
-      require(!judged, "feed gave a verdict at byte " + std::to_string(i) + ", which ends no line", input);
+      require(!judged, [&] { return "feed gave a verdict at byte " + std::to_string(i) + ", which ends no line"; },
+              input);
       line.add(byte);
       continue;
     }
     const bool expected = line.gets_verdict();
     require(judged == expected,
-            std::string("line ending at byte ") + std::to_string(i) + (expected ? " got no verdict" : " got a verdict") +
-                " (" + std::to_string(line.length) + " bytes, " + (line.blank ? "blank" : "not blank") + ")",
+            [&] {
+              return "line ending at byte " + std::to_string(i) + (expected ? " got no verdict" : " got a verdict") +
+                     " (" + std::to_string(line.length) + " bytes, " + (line.blank ? "blank" : "not blank") + ")";
+            },
             input);
     lines_with_verdict += expected ? 1 : 0;
     if (judged) {
@@ -109,8 +118,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     }
     line.clear();
   }
-  require(verdicts == lines_with_verdict, "verdict count " + std::to_string(verdicts) + " != " +
-                                              std::to_string(lines_with_verdict) + " lines that are not ignored",
+  require(verdicts == lines_with_verdict,
+          [&] {
+            return "verdict count " + std::to_string(verdicts) + " != " + std::to_string(lines_with_verdict) +
+                   " lines that are not ignored";
+          },
           input);
   return 0;
 }

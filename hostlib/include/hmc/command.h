@@ -15,7 +15,6 @@
 
 namespace hmc {
 
-namespace proto = ::hmc::proto;
 
 // STM: move, run, stop or home a stepper.
 struct StepperMove {
