@@ -9,7 +9,6 @@
 #include <iostream>
 #include <optional>
 #include <set>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -17,6 +16,7 @@
 #include "hmc/codec.h"
 #include "hmc/command_json.h"
 #include "hmc/line_splitter.h"
+#include "vector_input.h"
 
 namespace {
 
@@ -76,22 +76,6 @@ json expected_verdict(const json& e) {
           {"found", e.value("found", 0)}};
 }
 
-// Each code point U+0000..U+00FF of the JSON string is one byte.
-std::string bytes_of(const std::string& utf8) {
-  std::string out;
-  for (std::size_t i = 0; i < utf8.size(); ++i) {
-    const auto c = static_cast<unsigned char>(utf8[i]);
-    if (c < 0x80) {
-      out += static_cast<char>(c);
-    } else if ((c & 0xE0) == 0xC0 && i + 1 < utf8.size() && c <= 0xC3) {
-      out += static_cast<char>(((c & 0x1F) << 6) | (static_cast<unsigned char>(utf8[++i]) & 0x3F));
-    } else {
-      throw std::runtime_error("vector input has a code point above U+00FF");
-    }
-  }
-  return out;
-}
-
 std::vector<json> firmware_verdicts(const std::string& stream) {
   hmc::fw::FrameParser parser;
   std::vector<json> out;
@@ -129,7 +113,7 @@ std::vector<std::string> check_vector(const json& vector, Tally& tally) {
   std::vector<std::string> problems;
   const std::string id = vector.at("id");
   const std::string kind = vector.at("kind");
-  const std::string input = bytes_of(vector.at("input"));
+  const std::string input = hmc::conformance::input_bytes(vector.at("input"));
   const json& expect = vector.at("expect");
 
   json want;

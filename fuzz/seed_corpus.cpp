@@ -12,26 +12,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "vector_input.h"
+
 namespace {
 
 namespace fs = std::filesystem;
-
-// Each code point U+0000..U+00FF of a vector's input string is one byte (conformance/README.md).
-std::string bytes_of(const std::string& utf8) {
-  std::string out;
-  for (std::size_t i = 0; i < utf8.size(); ++i) {
-    const auto c = static_cast<unsigned char>(utf8[i]);
-    if (c < 0x80) {
-      out += static_cast<char>(c);
-    } else if (c >= 0xC2 && c <= 0xC3 && i + 1 < utf8.size()) {
-      const auto next = static_cast<unsigned char>(utf8[++i]);
-      out += static_cast<char>(((c & 0x1Fu) << 6) | (next & 0x3Fu));
-    } else {
-      throw std::runtime_error("input has a code point above U+00FF");
-    }
-  }
-  return out;
-}
 
 // A vector id as a file name: anything but letters, digits, '-', '_' and '.' becomes '_'.
 std::string file_name(const std::string& id) {
@@ -68,7 +53,7 @@ int main(int argc, char** argv) {
       const nlohmann::json doc = nlohmann::json::parse(in);
       for (const nlohmann::json& vector : doc.at("vectors")) {
         const std::string id = vector.at("id").get<std::string>();
-        std::string bytes = bytes_of(vector.at("input").get<std::string>());
+        std::string bytes = hmc::conformance::input_bytes(vector.at("input").get<std::string>());
         if (vector.at("kind").get<std::string>() == "line") bytes += '\n';
         std::ofstream out(out_dir / file_name(id), std::ios::binary | std::ios::trunc);
         out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
