@@ -1,0 +1,181 @@
+// Unit tests of the ramp math: the interrupt's integer helpers (step_math.h) against plain
+// 64-bit and long double arithmetic, and the planner's phase counts.
+#include "core/ramp.h"
+
+#include <catch2/catch.hpp>
+
+#include <stdint.h>
+
+#include <cmath>
+#include <random>
+
+#include "core/step_math.h"
+
+using hmc::fw::kEndless;
+using hmc::fw::MoveSpec;
+using hmc::fw::Phase;
+using hmc::fw::PhaseKind;
+using hmc::fw::plan_move;
+using hmc::fw::plan_stop;
+using hmc::fw::PlanStatus;
+using hmc::fw::Profile;
+namespace rm = hmc::fw::ramp_math;
+namespace sm = hmc::fw::step_math;
+
+namespace {
+
+__extension__ typedef unsigned __int128 U128;
+
+uint32_t reference_isqrt(uint64_t x) {
+  auto root = static_cast<uint64_t>(std::sqrt(static_cast<long double>(x)));
+  while (root * root > x) --root;
+  while ((root + 1) * (root + 1) <= x) ++root;
+  return static_cast<uint32_t>(root);
+}
+
+uint32_t phase_total(const Profile& profile) {
+  uint32_t total = 0;
+  for (uint8_t i = 0; i < profile.phase_count; ++i) total += profile.phases[i].steps;
+  return total;
+}
+
+}  // namespace
+
+TEST_CASE("mul_u32 is the exact 64-bit product") {
+  std::mt19937_64 rng(1);
+  const uint32_t edges[] = {0, 1, 0xFFFF, 0x10000, 0x7FFFFFFF, 0x80000000u, 0xFFFFFFFFu};
+  for (uint32_t a : edges) {
+    for (uint32_t b : edges) CHECK(sm::mul_u32(a, b) == uint64_t{a} * b);
+  }
+  for (int i = 0; i < 100000; ++i) {
+    const auto a = static_cast<uint32_t>(rng());
+    const auto b = static_cast<uint32_t>(rng());
+    REQUIRE(sm::mul_u32(a, b) == uint64_t{a} * b);
+  }
+}
+
+TEST_CASE("settle_root finds floor(sqrt) from any guess") {
+  std::mt19937_64 rng(2);
+  for (int i = 0; i < 200000; ++i) {
+    const uint64_t m = rng() >> (4 + rng() % 60);  // below 2^60, all magnitudes
+    const uint32_t exact = reference_isqrt(m);
+    uint32_t guess = 0;
+    switch (i % 4) {
+      case 0: guess = exact; break;
+      case 1: guess = exact + static_cast<uint32_t>(rng() % 3); break;
+      case 2: guess = exact > 0 ? exact - static_cast<uint32_t>(rng() % (exact + 1ull)) : 0; break;
+      default: guess = static_cast<uint32_t>(rng() % (2ull * exact + 2)); break;
+    }
+    int64_t rest = static_cast<int64_t>(m) - static_cast<int64_t>(uint64_t{guess} * guess);
+    uint32_t root = guess;
+    sm::settle_root(m, root, rest);
+    REQUIRE(root == exact);
+    REQUIRE(rest == static_cast<int64_t>(m - uint64_t{exact} * exact));
+  }
+}
+
+TEST_CASE("rounds_up decides floor(sqrt(m) + h)") {
+  std::mt19937_64 rng(3);
+  for (int i = 0; i < 100000; ++i) {
+    const uint64_t m = rng() >> (4 + rng() % 58);
+    const uint32_t root = reference_isqrt(m);
+    const auto g = static_cast<uint32_t>(1 + rng() % 65535);
+    const long double x = std::sqrt(static_cast<long double>(m));
+    const long double h = 1.0L - static_cast<long double>(g) / 65536.0L;
+    const int64_t rest = static_cast<int64_t>(m - uint64_t{root} * root);
+    const bool up = sm::rounds_up(root, rest, g);
+    const long double target = static_cast<long double>(root) + 1.0L - h;
+    if (std::fabs(x - target) < 1e-9L) continue;  // a tie the long double cannot call
+    REQUIRE(up == (x + h >= static_cast<long double>(root) + 1.0L));
+  }
+}
+
+TEST_CASE("isqrt, isqrt_q16 and mul_div") {
+  std::mt19937_64 rng(4);
+  CHECK(rm::isqrt(0) == 0);
+  CHECK(rm::isqrt(~uint64_t{0}) == 0xFFFFFFFFu);
+  CHECK(rm::isqrt_q16(2) == 92681);  // √2 · 65536 = 92681.9
+  CHECK(rm::mul_div(~uint64_t{0}, ~uint64_t{0}, ~uint64_t{0}) == ~uint64_t{0});
+  CHECK(rm::mul_div(uint64_t{1} << 63, 4, 8) == uint64_t{1} << 62);
+  CHECK(rm::mul_div(uint64_t{1} << 63, 4, 1) == ~uint64_t{0});  // saturates
+  for (int i = 0; i < 20000; ++i) {
+    const uint64_t x = rng() >> (2 + rng() % 60);
+    REQUIRE(rm::isqrt(x) == reference_isqrt(x));
+    const uint64_t q = rm::isqrt_q16(x);
+    const long double exact = std::sqrt(static_cast<long double>(x)) * 65536.0L;
+    REQUIRE(static_cast<long double>(q) <= exact + 1e-6L);
+    REQUIRE(static_cast<long double>(q) + 1.0L > exact - 1e-6L);
+    const uint64_t a = rng(), b = rng() >> (rng() % 64), c = (rng() >> (rng() % 64)) | 1;
+    const U128 p = static_cast<U128>(a) * b / c;
+    const uint64_t expected = p >> 64 ? ~uint64_t{0} : static_cast<uint64_t>(p);
+    REQUIRE(rm::mul_div(a, b, c) == expected);
+  }
+}
+
+TEST_CASE("plans split every move into phases that add up to it") {
+  std::mt19937_64 rng(5);
+  int checked = 0;
+  for (int i = 0; i < 20000; ++i) {
+    MoveSpec spec{};
+    spec.microstep = static_cast<uint16_t>(1u << (rng() % 9));
+    spec.steps = static_cast<uint32_t>(rng() % 5 == 0 ? 0 : 1 + rng() % 100000);
+    spec.interval = static_cast<uint32_t>(240 + rng() % 200000);
+    spec.accel = static_cast<uint32_t>(1 + rng() % 2000000);
+    Profile profile{};
+    const uint64_t entry = rng() % 3 == 0 ? 0 : rng() >> (8 + rng() % 40);
+    const PlanStatus status = plan_move(spec, entry, profile);
+    if (status != PlanStatus::kOk) {
+      CHECK(status == PlanStatus::kRampTooLong);
+      continue;
+    }
+    ++checked;
+    REQUIRE(profile.phase_count >= 1);
+    REQUIRE(profile.phase_count <= 3);
+    const Phase& last = profile.phases[profile.phase_count - 1];
+    if (spec.steps == 0) {
+      REQUIRE(profile.endless);
+      REQUIRE(last.kind == PhaseKind::kCruise);
+      REQUIRE(last.steps == kEndless);
+    } else {
+      REQUIRE(last.kind == PhaseKind::kDown);
+      REQUIRE(phase_total(profile) == profile.total_steps);
+      // Exact count, unless the move is shorter than the distance needed to stop from its entry.
+      if (uint64_t{spec.steps} * profile.k >= entry) REQUIRE(profile.total_steps == spec.steps);
+      // Braking ends at rest: M runs down to exactly 0 at a move's last step.
+      if (profile.total_steps == spec.steps) REQUIRE(last.m == uint64_t{last.steps} * profile.k);
+    }
+    for (uint8_t p = 0; p < profile.phase_count; ++p) {
+      const Phase& phase = profile.phases[p];
+      if (phase.kind == PhaseKind::kDown) REQUIRE(phase.m >= uint64_t{phase.steps} * profile.k);
+      if (phase.kind != PhaseKind::kCruise) REQUIRE(phase.root == reference_isqrt(phase.m));
+    }
+  }
+  CHECK(checked > 10000);
+}
+
+TEST_CASE("plans refuse what they cannot do") {
+  Profile profile{};
+  CHECK(plan_move({false, 3, 10, 4800, 0}, 0, profile) == PlanStatus::kBadMicrostep);
+  CHECK(plan_move({false, 512, 10, 4800, 0}, 0, profile) == PlanStatus::kBadMicrostep);
+  CHECK(plan_move({false, 0, 10, 4800, 0}, 0, profile) == PlanStatus::kBadMicrostep);
+  CHECK(plan_move({false, 1, 10, 239, 0}, 0, profile) == PlanStatus::kIntervalShort);
+  CHECK(plan_move({false, 1, 10, 240, 0}, 0, profile) == PlanStatus::kOk);
+  CHECK(plan_move({false, 1, 10, 4800, 0x80000000u}, 0, profile) == PlanStatus::kBadAccel);
+  // 1 step/s² up to 10 000 steps/s would take 10 000 s.
+  CHECK(plan_move({false, 1, 10, 4800, 1}, 0, profile) == PlanStatus::kRampTooLong);
+  CHECK(plan_stop({false, 1, 10, 4800, 1000}, uint64_t{1} << 61, profile) ==
+        PlanStatus::kRampTooLong);
+}
+
+TEST_CASE("a stop brakes over floor(M/K) steps") {
+  Profile profile{};
+  const MoveSpec spec{false, 1, 0, 4800, 1000};
+  const uint64_t k = 2 * 48000000ull * 48000000ull / 1000;
+  REQUIRE(plan_stop(spec, 7 * k + 5, profile) == PlanStatus::kOk);
+  CHECK(profile.stopping);
+  CHECK(profile.total_steps == 7);
+  CHECK(profile.phases[0].kind == PhaseKind::kDown);
+  REQUIRE(plan_stop(spec, k - 1, profile) == PlanStatus::kOk);
+  CHECK(profile.total_steps == 0);
+  CHECK(profile.phase_count == 0);
+}
