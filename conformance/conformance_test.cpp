@@ -26,17 +26,10 @@ namespace proto = hmc::proto;
 // A verdict in the vector's own terms, so the vector and both parsers compare field by field.
 json fw_command_json(const hmc::fw::Command& c) {
   const proto::CommandSpec& spec = proto::command_spec(c.id);
-  uint32_t v[proto::kMaxValues] = {};
-  switch (c.id) {
-    case proto::CommandId::kStepper:
-      v[0] = c.stepper.motor, v[1] = c.stepper.dir, v[2] = c.stepper.microstep, v[3] = c.stepper.steps,
-      v[4] = c.stepper.delay_us;
-      break;
-    case proto::CommandId::kServo: v[0] = c.servo.servo, v[1] = c.servo.angle; break;
-    case proto::CommandId::kLed: v[0] = c.led.strip, v[1] = c.led.r, v[2] = c.led.g, v[3] = c.led.b, v[4] = c.led.w; break;
-  }
+  uint32_t values[proto::kMaxValues] = {};
+  const uint32_t count = hmc::fw::command_values(c, values);
   json out = {{"name", spec.name}};
-  for (uint32_t i = 0; i < spec.value_count; ++i) out[spec.fields[i].name] = v[i];
+  for (uint32_t i = 0; i < count; ++i) out[spec.fields[i].name] = values[i];
   return out;
 }
 

@@ -69,29 +69,7 @@ struct Values {
 inline Values values_of(const fw::Command& c) {
   Values out;
   out.id = c.id;
-  switch (c.id) {
-    case proto::CommandId::kStepper:
-      out.count = 5;
-      out.v[0] = c.stepper.motor;
-      out.v[1] = c.stepper.dir;
-      out.v[2] = c.stepper.microstep;
-      out.v[3] = c.stepper.steps;
-      out.v[4] = c.stepper.delay_us;
-      break;
-    case proto::CommandId::kServo:
-      out.count = 2;
-      out.v[0] = c.servo.servo;
-      out.v[1] = c.servo.angle;
-      break;
-    case proto::CommandId::kLed:
-      out.count = 5;
-      out.v[0] = c.led.strip;
-      out.v[1] = c.led.r;
-      out.v[2] = c.led.g;
-      out.v[3] = c.led.b;
-      out.v[4] = c.led.w;
-      break;
-  }
+  out.count = fw::command_values(c, out.v);
   return out;
 }
 

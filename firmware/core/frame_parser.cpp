@@ -205,6 +205,25 @@ bool judge_values(const uint8_t* line, const Tokens& tokens, const CommandSpec& 
 
 }  // namespace
 
+uint32_t command_values(const Command& command, uint32_t (&values)[proto::kMaxValues]) {
+  switch (command.id) {
+    case proto::CommandId::kStepper: {
+      const StepperCommand& c = command.stepper;
+      values[0] = c.motor, values[1] = c.dir, values[2] = c.microstep, values[3] = c.steps, values[4] = c.delay_us;
+      break;
+    }
+    case proto::CommandId::kServo:
+      values[0] = command.servo.servo, values[1] = command.servo.angle;
+      break;
+    case proto::CommandId::kLed: {
+      const LedCommand& c = command.led;
+      values[0] = c.strip, values[1] = c.r, values[2] = c.g, values[3] = c.b, values[4] = c.w;
+      break;
+    }
+  }
+  return proto::command_spec(command.id).value_count;
+}
+
 // Starts with an empty line and an all-zero verdict; line_ needs no clearing, as only its first
 // length_ bytes are ever read.
 FrameParser::FrameParser() : length_(0) { give_verdict(verdict_, Reason::kOk); }

@@ -52,6 +52,9 @@ struct Verdict {
   Command command;       // valid only when reason == kOk
 };
 
+// A command's values in wire order (its command table's field order); returns how many.
+uint32_t command_values(const Command& command, uint32_t (&values)[proto::kMaxValues]);
+
 class FrameParser {
  public:
   FrameParser();
