@@ -226,12 +226,13 @@ uint32_t command_values(const Command& command, uint32_t (&values)[proto::kMaxVa
 
 // Starts with an empty line and an all-zero verdict; line_ needs no clearing, as only its first
 // length_ bytes are ever read.
-FrameParser::FrameParser() : length_(0) { give_verdict(verdict_, Reason::kOk); }
+FrameParser::FrameParser() : length_(0), last_length_(0) { give_verdict(verdict_, Reason::kOk); }
 
 // Stores the byte, or judges the line when the byte ends it.
 bool FrameParser::feed(uint8_t byte) {
   if (byte == '\r' || byte == '\n') {
     const bool judged = parse_line(line_, length_, verdict_);
+    last_length_ = length_ < proto::kLineMax ? length_ : proto::kLineMax;
     length_ = 0;
     return judged;
   }
@@ -240,6 +241,15 @@ bool FrameParser::feed(uint8_t byte) {
   // grows cannot wrap around on an endless line.
   if (length_ <= proto::kLineMax) ++length_;
   return false;
+}
+
+uint8_t FrameParser::token_offset(uint8_t token) const {
+  uint32_t i = 0;
+  while (i < last_length_ && is_blank(line_[i])) ++i;
+  for (uint8_t seen = 0; seen < token && i < last_length_; ++i) {
+    if (line_[i] == '#') ++seen;
+  }
+  return static_cast<uint8_t>(i);
 }
 
 // Steps 1 to 11 of the order of checks; judge_values() does the rest.

@@ -65,6 +65,10 @@ class FrameParser {
 
   // The verdict of the line feed() last completed.
   const Verdict& verdict() const { return verdict_; }
+  // The byte offset of `token` in the line feed() last completed (leading blanks included),
+  // for refusals the controller makes after the parser accepted the line. Valid until the next
+  // feed(); the offset of the line's end when the line has fewer tokens.
+  uint8_t token_offset(uint8_t token) const;
 
   // Judges one line (terminator excluded) of any length. Returns false for a blank line, which
   // gets no verdict. feed() uses this at every line end; tests and fuzzers may call it directly.
@@ -73,6 +77,7 @@ class FrameParser {
  private:
   uint8_t line_[proto::kLineMax];
   uint32_t length_;   // bytes received on the current line, counting those not stored
+  uint32_t last_length_;  // stored bytes of the line last completed
   Verdict verdict_;
 };
 

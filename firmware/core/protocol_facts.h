@@ -49,6 +49,12 @@ enum class Reason : uint8_t {
   kChecksumMismatch = 8,  // the checksum field is not the sum of the values mod 256
   kOutOfRange = 9,        // a value is outside its field's range
   kNoSwitch = 10,         // homing asked of a motor that has no limit switch
+  // Refusals by the board's rules (controller.h), after the frame itself was accepted.
+  kLimitPressed = 11,     // a move toward a limit switch that is pressed (seed rule [1])
+  kMotorsRunning = 12,    // homing while a motor moves (seed rule [2])
+  kEmergencyStop = 13,    // motion while the emergency switch is pressed
+  kBusy = 14,             // legacy mode: servo or LED while a stepper runs (seed rule [5])
+  kRateLimit = 15,        // the step rate is beyond what the board can time
 };
 
 struct ReasonSpec {
@@ -69,6 +75,11 @@ inline constexpr ReasonSpec kReasons[] = {
     {Reason::kChecksumMismatch, "checksum_mismatch", "checksum does not match the values"},
     {Reason::kOutOfRange, "out_of_range", "value outside the field's range"},
     {Reason::kNoSwitch, "no_switch", "motor has no limit switch to home against"},
+    {Reason::kLimitPressed, "limit_pressed", "move toward a pressed limit switch"},
+    {Reason::kMotorsRunning, "motors_running", "homing needs every motor at rest"},
+    {Reason::kEmergencyStop, "emergency_stop", "emergency switch is pressed"},
+    {Reason::kBusy, "busy", "servo and LED wait while a stepper runs (legacy mode)"},
+    {Reason::kRateLimit, "rate_limit", "step rate beyond what the board can time"},
 };
 inline constexpr uint32_t kReasonCount = sizeof(kReasons) / sizeof(kReasons[0]);
 
@@ -82,6 +93,12 @@ constexpr bool reasons_indexed_by_code() {
   return true;
 }
 static_assert(reasons_indexed_by_code(), "kReasons[i] must describe reason code i");
+
+// ---------------------------------------------------------------------------------------
+// Replies (protocol v2; reply_writer.h): one per non-blank line received.
+
+inline constexpr const char* kReplyAccepted = "ACK";  // no values
+inline constexpr const char* kReplyRefused = "NAK";   // reason, token (255: none), offset
 
 // ---------------------------------------------------------------------------------------
 // Board facts the grammar depends on

@@ -1,0 +1,186 @@
+// Controller: the board's behaviour. It reads command lines from the serial port, decides what
+// each accepted frame does and which rules refuse it, and owns every output: the steppers
+// (through StepScheduler and the DRV8711 drivers), servos, LED strips, buzzer and booting LEDs.
+//
+// Rules (seed 003, 모터 동작 시 유의사항; docs/protocol.md "What the board does"):
+//  - STM forward/reverse moves `steps` steps (0: until stopped) at `microstep` and `delay_us` per
+//    step; a new STM for a running motor replaces its move; dir 0 stops it (braking when the
+//    motor has an acceleration); dir 3 homes motors 1-2: reverse toward switch end 0 until it
+//    closes, then the position is zero. A microstep change while running stops the motor
+//    first, writes MODE while it rests, then starts the new move.
+//  - [1] a move toward a pressed limit switch is refused; a switch closing during a move toward
+//    it halts that motor at once. [2] homing starts only while every motor rests.
+//  - [3] fixed: every motor keeps its own rate. [5] lifted: servo and LED frames work while
+//    steppers run; Options::legacy restores the seed's refusal.
+//  - The emergency switch halts every motor at once (no braking) and, while pressed, refuses
+//    STM moves and homing and SVM. Stops and LED frames still work.
+//  - The board's step interrupt has a budget (kMaxStepRate): a move whose rate would take the
+//    sum of the commanded rates above it is refused, as is a delay the timer cannot count.
+//  - Every refused line sounds the warning tone. With Options::replies every line is answered
+//    in order (reply_writer.h): ACK, or NAK with the reason, token and offset.
+//
+// Contexts: boot() and poll() run in the main loop; on_step_timer() is the step timer's
+// interrupt; on_switch_change() is the switches' interrupt (lower priority than the step timer).
+// Freestanding: no heap; every buffer is a member.
+#pragma once
+
+#include <stdint.h>
+
+#include "drv8711.h"
+#include "frame_parser.h"
+#include "hal.h"
+#include "protocol_facts.h"
+#include "step_scheduler.h"
+
+namespace hmc::fw {
+
+// The hardware the controller drives.
+struct Board {
+  hal::StepTimer& timer;
+  hal::StepPins& pins;
+  hal::SpiBus& spi;
+  hal::ServoPwm& servos;
+  hal::LedStrips& leds;
+  hal::Switches& switches;
+  hal::Buzzer& buzzer;
+  hal::BootLeds& boot_leds;
+  hal::SerialPort& serial;
+};
+
+struct ControllerOptions {
+  bool legacy = false;     // seed rule [5]: SVM and LED refused while any stepper runs
+  bool replies = true;     // answer every line; false: the seed's silence
+  bool self_test = true;   // at boot: each stepper half a turn forward and back, servos centred
+};
+
+// Sum of the commanded step rates of all moving motors the step interrupt is given, in steps/s.
+// The interrupt costs ≈ 750 cycles per step at constant rate and ≈ 1 170 with three motors
+// ramping (step_scheduler.h), so these keep it near 80 % of the 48 MHz M0+ at most.
+inline constexpr uint32_t kMaxStepRate = 50000;
+inline constexpr uint32_t kMaxRampingStepRate = 40000;  // when any moving motor ramps
+
+// Homing with delay 0 / microstep 0 (the spec's `STX#6#STM#1#3#0#0#0#4#ETX`) uses these.
+inline constexpr uint32_t kHomingDelayUs = 500;
+inline constexpr uint32_t kBootMicrostep = 16;     // MODE written at boot
+inline constexpr uint32_t kBootCurrentMa = 1000;   // a safe current for any 36v4-driven motor
+// A servo's pulse train stops this long after its last SVM (the seed detaches to stop jitter;
+// 160° at a typical 0.1 s/60° takes ≈ 0.27 s).
+inline constexpr uint32_t kServoHoldMs = 500;
+inline constexpr uint32_t kBootLedPeriodMs = 1000;
+// Self-test: half a turn (100 full steps) at kBootMicrostep, forward then back.
+inline constexpr uint32_t kSelfTestSteps = 100 * kBootMicrostep;
+inline constexpr uint32_t kSelfTestDelayUs = 250;
+
+// Buzzer tunes.
+struct Note {
+  uint16_t hz;
+  uint16_t ms;
+};
+inline constexpr Note kBootTune[] = {{1500, 120}, {2500, 120}};
+inline constexpr Note kWarningTune[] = {{800, 200}};
+
+// Servo pulse for an angle: 544 + angle·1856/180 µs, rounded (HARDWARE.md, Servos).
+constexpr uint16_t servo_pulse_us(uint32_t angle) {
+  return static_cast<uint16_t>(544u + (angle * 1856u + 90u) / 180u);
+}
+
+enum class MotorState : uint8_t {
+  kIdle,
+  kMoving,    // a counted move or a run until stopped
+  kHoming,    // seeking switch end 0
+  kChanging,  // stopping to change microstep; the next move waits in `pending`
+  kSelfTest,
+};
+
+class Controller {
+ public:
+  Controller(const Board& board, const ControllerOptions& options);
+
+  // Main loop, once: drivers set up and enabled, LEDs off, servos centred, boot tune, booting
+  // LEDs, self-test.
+  void boot();
+  // Main loop, as often as possible: serial bytes, lines, timers, ended motions, switches.
+  void poll();
+  // The step timer's interrupt.
+  void on_step_timer() { scheduler_.on_step_timer(); }
+  // The switches' interrupt: halts a motor moving toward a switch that closed, or all of them
+  // on the emergency switch. The main loop then finishes the bookkeeping.
+  void on_switch_change();
+
+  // Per-motor acceleration in steps/s² (0: constant rate, the seed's behaviour) for moves that
+  // start after the call. False for a bad motor.
+  bool set_acceleration(uint8_t motor, uint32_t steps_per_s2);
+
+  // For the simulator, tests and status.
+  MotorState state(uint8_t motor) const { return motors_[index(motor)].state; }
+  int32_t position(uint8_t motor) const { return scheduler_.position(motor); }  // 1/256 step
+  uint32_t microstep(uint8_t motor) const { return motors_[index(motor)].microstep; }
+  bool homed(uint8_t motor) const { return motors_[index(motor)].homed; }
+  bool self_test_running() const { return self_test_phase_ != 0; }
+  uint32_t lines_accepted() const { return accepted_; }
+  uint32_t lines_refused() const { return refused_; }
+  const StepScheduler& scheduler() const { return scheduler_; }
+  const drv8711::Drv8711& driver(uint8_t motor) const { return drivers_[index(motor)]; }
+
+ private:
+  struct Motor {
+    MotorState state;
+    uint32_t microstep;      // MODE last written
+    uint32_t accel;
+    uint32_t rate;           // commanded steps/s of the current move, 0 at rest
+    uint32_t seen_finished;  // scheduler.finished() last handled
+    bool homed;
+    volatile uint8_t toward; // switch end the motor moves toward: 0, 1, or kNoEnd
+    bool reverse;            // direction of the move last started
+    MoveSpec pending;        // kChanging: the move to start once the motor rests
+    uint32_t pending_rate;
+    MotorState pending_state;
+  };
+  // A rule's verdict on an accepted frame: kOk, or the reason and the token it concerns.
+  struct Refusal {
+    proto::Reason reason = proto::Reason::kOk;
+    uint8_t token = proto::kNoToken;
+  };
+  static constexpr uint8_t kNoEnd = 0xFF;
+  static uint8_t index(uint8_t motor) { return static_cast<uint8_t>(motor - 1u); }
+
+  void handle_line(const Verdict& verdict);
+  Refusal execute(const Command& command);
+  Refusal stepper(const StepperCommand& command);
+  Refusal home(const StepperCommand& command);
+  Refusal servo(const ServoCommand& command);
+  Refusal led(const LedCommand& command);
+  proto::Reason start_move(uint8_t motor, const MoveSpec& move, uint32_t rate, MotorState state);
+  bool within_budget(uint8_t motor, uint32_t rate, uint32_t accel) const;
+  bool any_moving() const;
+  void abort_self_test();
+  void stop_motor(uint8_t motor);
+
+  void check_motions();
+  void check_switches();
+  void run_timers(hal::Ticks now);
+  void advance_self_test();
+  void play(const Note* tune, uint8_t count);
+  void next_note(hal::Ticks now);
+
+  Board board_;
+  ControllerOptions options_;
+  StepScheduler scheduler_;
+  drv8711::Drv8711 drivers_[proto::kMotorCount];
+  FrameParser parser_;
+  Motor motors_[proto::kMotorCount];
+
+  bool emergency_;
+  bool limits_[proto::kMotorCount][2];
+  hal::Ticks servo_release_at_[proto::kServoCount];  // 0: no pulse running
+  hal::Ticks boot_led_at_;
+  bool boot_led_left_;
+  const Note* tune_;
+  uint8_t tune_left_;
+  hal::Ticks tune_next_at_;
+  uint8_t self_test_phase_;  // 0 none, 1 forward, 2 back
+  uint32_t accepted_;
+  uint32_t refused_;
+};
+
+}  // namespace hmc::fw

@@ -1,0 +1,172 @@
+// SimBoard: the firmware core on a simulated board, on a virtual clock.
+//
+// The board is the real Controller (controller.h) wired to simulated hardware: a 48 MHz step
+// timer whose interrupt runs at exactly the tick it was set for (and at once, preempting the
+// main loop, for a time already past, as the SAMD21 port pends it); three axes that move when
+// their DRV8711 is enabled, by 256/microstep position units per STEP rising edge, the
+// microstep read from the MODE bits the core wrote over SPI; limit switches that close at
+// configured positions; servos, LED strips, buzzer, booting LEDs; a UART whose received bytes
+// arrive at the pace of an emulated baud rate.
+//
+// The main loop (Controller::poll) runs after every received byte, after every switch change,
+// and every kPollTicks otherwise. Nothing here reads the wall clock: run_until() advances
+// virtual time as far as asked, processing events in time order, so results are exact and
+// repeatable. hmc-sim (sim_main.cpp) maps virtual time to real time, or runs as fast as possible.
+//
+// Trace: with set_trace(), every event is written as one JSON object per line:
+//   {"t":T,"ev":"step","motor":M,"pos":P}          STEP rising edge; P after it (1/256 step)
+//   {"t":T,"ev":"dir","motor":M,"reverse":B}
+//   {"t":T,"ev":"driver","motor":M,"enabled":B,"microstep":N}   a CTRL write
+//   {"t":T,"ev":"switch","motor":M,"end":E,"pressed":B}
+//   {"t":T,"ev":"emergency","pressed":B}
+//   {"t":T,"ev":"servo","servo":S,"pulse_us":U}   / {"t":T,"ev":"servo","servo":S,"released":true}
+//   {"t":T,"ev":"led","strip":S,"r":R,"g":G,"b":B,"w":W}
+//   {"t":T,"ev":"tone","hz":H,"ms":MS}
+//   {"t":T,"ev":"boot_leds","left":B,"right":B}
+//   {"t":T,"ev":"rx","line":"…"}  a line the board received;  {"t":T,"ev":"tx","line":"…"} sent
+// T is the virtual time in timer ticks (48 per µs) since power-up.
+#pragma once
+
+#include <stdint.h>
+
+#include <array>
+#include <deque>
+#include <memory>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "core/controller.h"
+#include "core/hal.h"
+
+namespace hmc::sim {
+
+using hal::Ticks;
+
+inline constexpr Ticks kNever = ~Ticks{0};
+inline constexpr Ticks kPollTicks = 100 * hal::kTicksPerMicrosecond;  // main loop at least every 100 µs
+
+struct AxisConfig {
+  bool has_switches = false;
+  int32_t start = 0;        // position at power-up (1/256 step)
+  int32_t low_switch = 0;   // switch end 0 is pressed at or below this position
+  int32_t high_switch = 0;  // switch end 1 is pressed at or above this position
+};
+
+struct SimConfig {
+  // Motors 1-2: switches at 0 and 8 turns (409 600 = 1 600 full steps), starting mid-travel.
+  // Motor 3 has none.
+  std::array<AxisConfig, 3> axes{{{true, 204800, 0, 409600}, {true, 204800, 0, 409600}, {}}};
+  fw::ControllerOptions options{};
+  std::array<uint32_t, 3> accel{};  // steps/s² per motor
+  uint32_t baud = 0;                // 0: received bytes arrive at once; else 10 bits per byte
+};
+
+// One switch's forced state, for injected events.
+enum class Force : uint8_t { kNone, kPressed, kReleased };
+
+class SimBoard {
+ public:
+  explicit SimBoard(const SimConfig& config);
+  ~SimBoard();
+  SimBoard(const SimBoard&) = delete;
+  SimBoard& operator=(const SimBoard&) = delete;
+
+  // Powers the board up at time 0: Controller::boot().
+  void boot();
+
+  Ticks now() const { return now_; }
+  // The next time anything happens on its own (timer, byte arrival, main loop); never kNever.
+  Ticks next_event() const;
+  // Runs the board until virtual time `t` (no-op for a time already past).
+  void run_until(Ticks t);
+  void run_for(Ticks ticks) { run_until(now_ + ticks); }
+  // True while a motor moves, a move waits, or received bytes are still arriving.
+  bool busy() const;
+
+  // Host → board: bytes queued on the line from now, at the emulated baud rate.
+  void send(const std::string& bytes);
+  // Board → host: the bytes written since the last call.
+  std::string take_output();
+
+  // Injected events (take effect now, as a switch interrupt would).
+  void force_limit(uint8_t motor, uint8_t end, Force force);
+  void set_emergency(bool pressed);
+
+  // Observations.
+  const fw::Controller& controller() const { return *controller_; }
+  int32_t axis_position(uint8_t motor) const;   // physical, 1/256 step
+  uint32_t steps(uint8_t motor) const;          // STEP rising edges since power-up
+  bool limit_pressed(uint8_t motor, uint8_t end) const;
+  bool emergency_pressed() const { return emergency_; }
+  uint16_t servo_pulse(uint8_t servo) const;    // µs, 0 when released
+  uint16_t servo_last_pulse(uint8_t servo) const;  // µs of the last pulse train, even if released
+  std::array<uint8_t, 4> led(uint8_t strip) const;  // r, g, b, w
+  struct Tone {
+    Ticks t;
+    uint16_t hz;
+    uint16_t ms;
+  };
+  const std::vector<Tone>& tones() const { return tones_; }
+  uint16_t driver_register(uint8_t motor, uint8_t address) const;
+  uint32_t driver_microstep(uint8_t motor) const;
+  bool driver_enabled(uint8_t motor) const;
+  // Rising-edge times of every step since record_steps(true), per motor.
+  void record_steps(bool on) { record_steps_ = on; }
+  const std::vector<Ticks>& step_times(uint8_t motor) const { return step_times_[motor - 1]; }
+  void clear_step_times();
+
+  // JSON-lines trace (see above); null turns it off.
+  void set_trace(std::ostream* out) { trace_ = out; }
+
+ private:
+  class Hardware;  // implements every HAL interface over this board's state
+  friend class Hardware;
+
+  struct Axis {
+    AxisConfig config;
+    int32_t position = 0;
+    bool reverse = false;
+    bool step_high = false;
+    uint32_t steps = 0;
+    bool pressed[2] = {false, false};
+    Force force[2] = {Force::kNone, Force::kNone};
+  };
+  struct Arrival {
+    Ticks at;
+    uint8_t byte;
+  };
+
+  void fire_timer();
+  void main_loop();
+  void update_switches(uint8_t motor);
+  void switch_interrupt();
+  void trace_line(const std::string& event_json);
+  void trace_bytes(const char* event, std::string& pending, const uint8_t* bytes, uint32_t count);
+
+  SimConfig config_;
+  Ticks now_ = 0;
+  Ticks timer_due_ = kNever;
+  bool in_interrupt_ = false;
+  bool switch_changed_ = false;
+  Ticks next_poll_ = 0;
+  std::array<Axis, 3> axes_{};
+  bool emergency_ = false;
+  std::array<std::array<uint16_t, 8>, 3> drv_{};
+  std::array<uint16_t, 2> servo_pulse_{};
+  std::array<uint16_t, 2> servo_last_pulse_{};
+  std::array<std::array<uint8_t, 4>, 2> leds_{};
+  std::vector<Tone> tones_;
+  std::deque<Arrival> line_in_;   // bytes on the wire, not yet received
+  std::deque<uint8_t> uart_rx_;   // received, not yet read by the firmware
+  Ticks wire_free_at_ = 0;        // when the wire finishes the last queued byte
+  std::string output_;
+  std::string rx_line_, tx_line_;
+  bool record_steps_ = false;
+  std::array<std::vector<Ticks>, 3> step_times_;
+  std::ostream* trace_ = nullptr;
+  std::unique_ptr<Hardware> hardware_;
+  std::unique_ptr<fw::Controller> controller_;
+};
+
+}  // namespace hmc::sim
