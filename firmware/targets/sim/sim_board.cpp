@@ -199,7 +199,7 @@ void SimBoard::run_until(Ticks t) {
 }
 
 bool SimBoard::busy() const {
-  if (!line_in_.empty() || !uart_rx_.empty()) return true;
+  if (receiving()) return true;
   for (uint8_t motor = 1; motor <= 3; ++motor) {
     if (controller_->scheduler().is_running(motor)) return true;
     if (controller_->state(motor) != fw::MotorState::kIdle) return true;

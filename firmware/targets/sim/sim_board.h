@@ -83,6 +83,8 @@ class SimBoard {
   void run_for(Ticks ticks) { run_until(now_ + ticks); }
   // True while a motor moves, a move waits, or received bytes are still arriving.
   bool busy() const;
+  // True while sent bytes are still on the wire or not yet read by the firmware.
+  bool receiving() const { return !line_in_.empty() || !uart_rx_.empty(); }
 
   // Host → board: bytes queued on the line from now, at the emulated baud rate.
   void send(const std::string& bytes);
