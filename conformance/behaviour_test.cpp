@@ -100,6 +100,11 @@ std::vector<std::string> check(SimBoard& board, const json& expect, std::vector<
       if (json(warnings) != want) fail(key, want, warnings);
       continue;
     }
+    if (key == "boot_leds") {
+      const json got = board.boot_leds();
+      if (got != want) fail(key, want, got);
+      continue;
+    }
     if (key == "tones") {
       json got = json::array();
       for (const auto& tone : board.tones()) got.push_back(tone.hz);

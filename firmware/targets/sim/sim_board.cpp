@@ -123,6 +123,7 @@ class SimBoard::Hardware final : public hal::StepTimer,
   }
 
   void set(bool left_on, bool right_on) override {
+    b_.boot_leds_ = {left_on, right_on};
     b_.trace_line(std::string("\"ev\":\"boot_leds\",\"left\":") + flag(left_on) +
                   ",\"right\":" + flag(right_on));
   }

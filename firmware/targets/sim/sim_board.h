@@ -104,6 +104,7 @@ class SimBoard {
   uint16_t servo_pulse(uint8_t servo) const;    // µs, 0 when released
   uint16_t servo_last_pulse(uint8_t servo) const;  // µs of the last pulse train, even if released
   std::array<uint8_t, 4> led(uint8_t strip) const;  // r, g, b, w
+  std::array<bool, 2> boot_leds() const { return boot_leds_; }  // left, right
   struct Tone {
     Ticks t;
     uint16_t hz;
@@ -158,6 +159,7 @@ class SimBoard {
   std::array<uint16_t, 2> servo_pulse_{};
   std::array<uint16_t, 2> servo_last_pulse_{};
   std::array<std::array<uint8_t, 4>, 2> leds_{};
+  std::array<bool, 2> boot_leds_{};
   std::vector<Tone> tones_;
   std::deque<Arrival> line_in_;   // bytes on the wire, not yet received
   std::deque<uint8_t> uart_rx_;   // received, not yet read by the firmware
