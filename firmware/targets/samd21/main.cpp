@@ -1,0 +1,89 @@
+// The SAMD21 firmware's entry: wires the board's HAL objects (this directory) into fw::Board,
+// runs the Controller, and routes the three interrupts the firmware uses.
+//
+//   irq_tc4      step timer, priority 0   → Controller::on_step_timer()
+//   irq_sercom5  command UART, priority 1 → receive ring / transmit ring
+//   irq_eic      switches, priority 2     → Controller::on_switch_change()
+//
+// Order at power-up: interrupts masked (and anything a bootloader enabled switched off), clocks
+// (48 MHz), watchdog, every output to its safe level, peripherals, interrupts on, then at least 1 ms before the drivers are configured (the DRV8711 accepts SPI
+// 1 ms after power-up, HARDWARE.md), Controller::boot(), and the main loop.
+#include "board.h"
+#include "boot_leds.h"
+#include "buzzer.h"
+#include "clocks.h"
+#include "core/controller.h"
+#include "irq.h"
+#include "led_strips.h"
+#include "serial_port.h"
+#include "servo_pwm.h"
+#include "spi_bus.h"
+#include "step_pins.h"
+#include "step_timer.h"
+#include "switches.h"
+#include "watchdog.h"
+
+namespace {
+
+using namespace hmc;
+
+samd21::StepTimer step_timer;
+samd21::StepPins step_pins;
+samd21::SpiBus spi_bus;
+samd21::ServoPwm servo_pwm;
+samd21::LedStrips led_strips;
+samd21::Switches switches;
+samd21::Buzzer buzzer(step_timer);
+samd21::BootLeds boot_leds;
+samd21::SerialPort serial_port;
+
+const fw::Board board{step_timer, step_pins, spi_bus,   servo_pwm,  led_strips,
+                      switches,   buzzer,    boot_leds, serial_port};
+fw::Controller controller(board, fw::ControllerOptions{});
+
+static_assert(samd21::board::uart::kSercom == 5, "irq_sercom5 below serves the command UART");
+
+constexpr hal::Ticks kDriverPowerUpTicks = hal::kTicksPerSecond / 1000u;  // 1 ms
+
+// Which clock the DFLL locked to, for a debugger (nothing on the wire reports it).
+volatile samd21::ClockSource clock_source;
+
+}  // namespace
+
+extern "C" void irq_tc4() {
+  if (step_timer.take_interrupt()) controller.on_step_timer();
+}
+
+extern "C" void irq_sercom5() { serial_port.on_interrupt(); }
+
+extern "C" void irq_eic() {
+  switches.take_interrupt();
+  controller.on_switch_change();
+}
+
+int main() {
+  samd21::irq_quiesce();
+  clock_source = samd21::clocks_init();
+  samd21::watchdog_start();
+
+  step_pins.init();  // STEP, DIR low; chip selects inactive (low)
+  step_timer.start();  // counting from here: the 1 ms wait below includes the set-up
+  boot_leds.init();
+  buzzer.init();
+  servo_pwm.init();
+  spi_bus.init();
+  led_strips.init();
+  serial_port.init();
+  switches.init();
+  samd21::irq_enable_all();
+
+  while (step_timer.now() < kDriverPowerUpTicks) samd21::watchdog_kick();
+  controller.boot();
+
+  for (;;) {
+    controller.poll();
+    led_strips.service();
+    buzzer.service();
+    samd21::watchdog_kick();
+  }
+}

@@ -1,0 +1,89 @@
+// StepTimer (step_timer.h). TC registers: regs_timer.h; 32-bit mode pairs TC4 (master, whose
+// registers and interrupt are used) with TC5 (SAMD21 datasheet, "TC", 32-bit counter mode).
+#include "step_timer.h"
+
+#include "board.h"
+#include "clocks.h"
+#include "irq.h"
+#include "reg_access.h"
+#include "regs_system.h"
+#include "regs_timer.h"
+
+namespace hmc::samd21 {
+namespace {
+
+constexpr uint32_t kTc = tc::kTc4;
+
+void sync() { wait_clear8(kTc + tc::kStatus, tc::kSyncBusy); }
+
+uint32_t read_count() {
+  r16(kTc + tc::kReadReq) = tc::kReadCount;
+  sync();
+  return r32(kTc + tc::kCount);
+}
+
+}  // namespace
+
+void StepTimer::start() {
+  set32(pm::kApbCMask, pm::kApbCTc4 | pm::kApbCTc5);
+  clock_connect(gclk::kIdTc4Tc5, kGclkCpu);
+  r16(kTc + tc::kCtrlA) = static_cast<uint16_t>(tc::kSwRst);
+  while ((r16(kTc + tc::kCtrlA) & tc::kSwRst) != 0) {
+  }
+  r16(kTc + tc::kCtrlA) = static_cast<uint16_t>(tc::kMode32 | tc::prescaler(0));
+  sync();
+  r32(kTc + tc::kCc0) = 0xFFFFFFFFu;
+  sync();
+  r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntOvf | tc::kIntMc0);
+  r8(kTc + tc::kIntEnSet) = static_cast<uint8_t>(tc::kIntOvf | tc::kIntMc0);
+  high_ = 0;
+  target_ = kNone;
+  nvic_set_priority(irqn::kTc4, board::kPriorityStepTimer);
+  nvic_unpend(irqn::kTc4);
+  nvic_enable(irqn::kTc4);
+  r16(kTc + tc::kCtrlA) = static_cast<uint16_t>(tc::kMode32 | tc::prescaler(0) | tc::kEnable);
+  sync();
+}
+
+// An overflow not yet counted (its flag still set) belongs to this read when the low word has
+// already wrapped; a low word still near the top was read before the wrap.
+hal::Ticks StepTimer::now_masked() const {
+  const uint32_t low = read_count();
+  uint32_t high = high_;
+  if ((r8(kTc + tc::kIntFlag) & tc::kIntOvf) != 0 && low < 0x80000000u) ++high;
+  return (static_cast<hal::Ticks>(high) << 32) | low;
+}
+
+hal::Ticks StepTimer::now() const {
+  const uint32_t primask = irq_save();
+  const hal::Ticks t = now_masked();
+  irq_restore(primask);
+  return t;
+}
+
+void StepTimer::schedule(hal::Ticks when) {
+  const uint32_t primask = irq_save();
+  target_ = when;
+  r32(kTc + tc::kCc0) = static_cast<uint32_t>(when);
+  sync();
+  r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntMc0);  // a stale match; see below
+  // The compare is live from here on. If the counter is already at or past `when`, it will not
+  // match (or matched before the flag was cleared): pend the interrupt instead.
+  if (now_masked() >= when) nvic_pend(irqn::kTc4);
+  irq_restore(primask);
+}
+
+bool StepTimer::take_interrupt() {
+  const uint32_t flags = r8(kTc + tc::kIntFlag) & (tc::kIntOvf | tc::kIntMc0);
+  if ((flags & tc::kIntOvf) != 0) {
+    r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntOvf);  // write 1 to clear
+    high_ = high_ + 1u;
+  }
+  if ((flags & tc::kIntMc0) != 0) r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntMc0);
+  const hal::Ticks target = target_;
+  if (target == kNone || now_masked() < target) return false;
+  target_ = kNone;
+  return true;
+}
+
+}  // namespace hmc::samd21
