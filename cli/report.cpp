@@ -24,12 +24,22 @@ void print_warnings(std::ostream& out, const std::vector<Warning>& warnings) {
   for (const Warning& w : warnings) out << "warning: " << w.message << "\n";
 }
 
-void print_command(std::ostream& out, const Command& command) {
+void print_command(std::ostream& out, const Command& command, proto::ChecksumMode mode) {
   const proto::CommandSpec& spec = command_spec(command);
   const CommandValues v = command_values(command);
   out << spec.name << ": " << describe(command) << "\n ";
   for (uint32_t i = 0; i < v.count; ++i) out << " " << spec.fields[i].name << "=" << v.values[i];
-  out << " checksum=" << checksum(command) << "\n";
+  out << " checksum=" << checksum(command, mode) << "\n";
+}
+
+void print_board_frame(std::ostream& out, const BoardFrame& frame) {
+  const proto::BoardFrameSpec& spec = board_frame_spec(frame);
+  out << spec.name << (is_event(frame) ? " (event): " : " (reply): ") << describe(frame) << "\n";
+  const auto values = board_frame_values(frame);  // a decoded frame always has its values
+  if (!values || values->count == 0) return;
+  out << " ";
+  for (uint32_t i = 0; i < values->count; ++i) out << " " << spec.fields[i].name << "=" << values->values[i];
+  out << "\n";
 }
 
 }  // namespace hmc::cli

@@ -59,12 +59,20 @@ Ticks ticks_at(const json& step) {
   return static_cast<Ticks>(std::llround(step.at("at_ms").get<double>() * 48000.0));
 }
 
-std::vector<std::string> lines_of(const std::string& bytes) {
-  std::vector<std::string> lines;
-  std::istringstream in(bytes);
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
-}
+// What the board sent, split: replies (one per line received) and events (names starting
+// with 'E', docs/protocol.md "Telling frames apart").
+struct Output {
+  std::vector<std::string> replies;
+  std::vector<std::string> events;
+
+  void add(const std::string& bytes) {
+    std::istringstream in(bytes);
+    for (std::string line; std::getline(in, line);) {
+      const std::size_t name = line.find('#', line.find('#') + 1) + 1;
+      (line.compare(name, 1, "E") == 0 ? events : replies).push_back(line);
+    }
+  }
+};
 
 void apply(SimBoard& board, const json& step) {
   if (step.contains("send")) board.send(step.at("send").get<std::string>() + "\n");
@@ -78,20 +86,24 @@ void apply(SimBoard& board, const json& step) {
     board.force_limit(which.at(0).get<uint8_t>(), which.at(1).get<uint8_t>(), force);
   }
   if (step.contains("estop")) board.set_emergency(step.at("estop").get<bool>());
+  if (step.contains("fault")) {
+    board.set_driver_fault(step.at("fault").at(0).get<uint8_t>(), step.at("fault").at(1).get<uint8_t>());
+  }
 }
 
 // Checks one expectation block; returns the failures, each naming what differed.
-std::vector<std::string> check(SimBoard& board, const json& expect, std::vector<std::string>& replies,
+std::vector<std::string> check(SimBoard& board, const json& expect, Output& output,
                                const std::string& where) {
   std::vector<std::string> failures;
   const auto fail = [&](const std::string& what, const json& want, const json& got) {
     failures.push_back(where + ": " + what + ": expected " + want.dump() + ", got " + got.dump());
   };
   for (const auto& [key, want] : expect.items()) {
-    if (key == "replies") {
-      const json got = replies;
+    if (key == "replies" || key == "events") {
+      std::vector<std::string>& lines = key == "replies" ? output.replies : output.events;
+      const json got = lines;
       if (got != want) fail(key, want, got);
-      replies.clear();
+      lines.clear();
       continue;
     }
     if (key == "warnings") {
@@ -149,20 +161,20 @@ void run_vector(const json& vector, Tally& tally) {
     const std::string mode = mode_json.get<std::string>();
     SimBoard board(config_for(vector, mode));
     board.boot();
-    std::vector<std::string> replies;
+    Output output;
     ++tally.runs;
     for (const json& step : vector.at("script")) {
       board.run_until(ticks_at(step));
-      for (auto& line : lines_of(board.take_output())) replies.push_back(line);
+      output.add(board.take_output());
       apply(board, step);
       board.run_until(board.now());  // what arrived at this instant is handled at it
-      for (auto& line : lines_of(board.take_output())) replies.push_back(line);
+      output.add(board.take_output());
       const std::string key = mode == "normal" ? "expect" : "expect_" + mode;
       const json* expect = step.contains(key) ? &step.at(key) : step.contains("expect") ? &step.at("expect") : nullptr;
       if (expect == nullptr) continue;
       ++tally.expectations;
       const std::string where = id + " [" + mode + "] at " + step.at("at_ms").dump() + " ms";
-      for (const std::string& failure : check(board, *expect, replies, where)) FAIL_CHECK(failure);
+      for (const std::string& failure : check(board, *expect, output, where)) FAIL_CHECK(failure);
     }
   }
 }

@@ -1,7 +1,9 @@
 // The conformance runner: plays every vector in conformance/vectors/ against the firmware's
 // FrameParser (byte by byte) and the host codec (line splitter + decode), and fails naming the
-// vector and both verdicts when either parser disagrees with the vector or with the other.
-// conformance/README.md defines the vector format.
+// vector and both verdicts when either parser disagrees with the vector or with the other, in
+// the vector's checksum mode. Board -> host vectors (`board_line`) go to the host's
+// decode_board_frame, and their canonical frames are held to what the firmware's reply writer
+// writes. conformance/README.md defines the vector format.
 #include <catch2/catch.hpp>
 
 #include <filesystem>
@@ -13,6 +15,8 @@
 #include <vector>
 
 #include "core/frame_parser.h"
+#include "core/reply_writer.h"
+#include "hmc/board_frame.h"
 #include "hmc/codec.h"
 #include "hmc/command_json.h"
 #include "hmc/line_splitter.h"
@@ -69,8 +73,16 @@ json expected_verdict(const json& e) {
           {"found", e.value("found", 0)}};
 }
 
-std::vector<json> firmware_verdicts(const std::string& stream) {
+// The vector's checksum mode: "sum" (the default) or "crc16".
+proto::ChecksumMode mode_of(const json& vector) {
+  const std::string mode = vector.value("checksum_mode", "sum");
+  REQUIRE((mode == "sum" || mode == "crc16"));
+  return mode == "crc16" ? proto::ChecksumMode::kCrc16 : proto::ChecksumMode::kSum;
+}
+
+std::vector<json> firmware_verdicts(const std::string& stream, proto::ChecksumMode mode) {
   hmc::fw::FrameParser parser;
+  parser.set_checksum_mode(mode);
   std::vector<json> out;
   for (char c : stream) {
     if (parser.feed(static_cast<uint8_t>(c))) out.push_back(fw_verdict_json(parser.verdict()));
@@ -79,11 +91,11 @@ std::vector<json> firmware_verdicts(const std::string& stream) {
 }
 
 // The host's verdicts for a stream delivered in two reads split at `cut`.
-std::vector<json> host_verdicts(const std::string& stream, std::size_t cut) {
+std::vector<json> host_verdicts(const std::string& stream, std::size_t cut, proto::ChecksumMode mode) {
   hmc::LineSplitter splitter;
   std::vector<json> out;
   auto drain = [&] {
-    while (auto line = splitter.next()) out.push_back(host_verdict_json(hmc::decode(line->text)));
+    while (auto line = splitter.next()) out.push_back(host_verdict_json(hmc::decode(line->text, mode)));
   };
   splitter.feed(std::string_view(stream).substr(0, cut));
   drain();
@@ -99,14 +111,68 @@ json as_list(const std::vector<json>& verdicts) {
 
 struct Tally {
   int vectors = 0, firmware_ok = 0, host_ok = 0, agree = 0;
+  int board_lines = 0, board_host_ok = 0, board_written = 0, board_writer_ok = 0;
 };
+
+class CapturePort : public hmc::hal::SerialPort {
+ public:
+  int read_byte() override { return -1; }
+  void write(const uint8_t* bytes, uint32_t count) override {
+    text.append(reinterpret_cast<const char*>(bytes), count);
+  }
+  std::string text;
+};
+
+json board_verdict_json(const hmc::Result<hmc::BoardFrame, hmc::Diagnostic>& r) {
+  if (r) return {{"verdict", "accepted"}, {"frame", hmc::board_frame_to_json(*r)}, {"event", hmc::is_event(*r)}};
+  const hmc::Diagnostic& d = r.error();
+  std::optional<int> token;
+  if (d.token != hmc::kNoToken) token = d.token;
+  return refused_json(d.reason, token, d.offset, d.expected, d.found);
+}
+
+// A board -> host line: the host's decode_board_frame against the vector; a canonical accepted
+// frame must also be what encode_board_frame and the firmware's reply writer write.
+std::vector<std::string> check_board_line(const json& vector, Tally& tally) {
+  std::vector<std::string> problems;
+  const std::string id = vector.at("id");
+  const std::string input = hmc::conformance::input_bytes(vector.at("input"));
+  const proto::ChecksumMode mode = mode_of(vector);
+  const json& expect = vector.at("expect");
+  const json want = expect.at("verdict") == "accepted"
+                        ? json{{"verdict", "accepted"}, {"frame", expect.at("frame")}, {"event", expect.at("event")}}
+                        : expected_verdict(expect);
+  const auto decoded = hmc::decode_board_frame(input, mode);
+  const json host = board_verdict_json(decoded);
+  ++tally.board_lines;
+  tally.board_host_ok += host == want;
+  if (host != want) problems.push_back(id + ": expected " + want.dump() + "\n    host: " + host.dump());
+  if (decoded && expect.value("canonical", false)) {
+    const auto again = hmc::encode_board_frame(*decoded, mode);
+    if (!again || *again != input) {
+      problems.push_back(id + ": encode_board_frame gave " + (again ? *again : again.error().message));
+    }
+    ++tally.board_written;
+    const auto values = hmc::board_frame_values(*decoded);
+    CapturePort port;
+    if (values) hmc::fw::write_frame(port, hmc::board_frame_id(*decoded), values->values.data(), mode);
+    if (port.text == input + "\n") {
+      ++tally.board_writer_ok;
+    } else {
+      problems.push_back(id + ": the firmware's reply writer writes " + port.text);
+    }
+  }
+  return problems;
+}
 
 // Checks one vector; returns the mismatches found, each a line of text.
 std::vector<std::string> check_vector(const json& vector, Tally& tally) {
+  const std::string kind = vector.at("kind");
+  if (kind == "board_line") return check_board_line(vector, tally);
   std::vector<std::string> problems;
   const std::string id = vector.at("id");
-  const std::string kind = vector.at("kind");
   const std::string input = hmc::conformance::input_bytes(vector.at("input"));
+  const proto::ChecksumMode mode = mode_of(vector);
   const json& expect = vector.at("expect");
 
   json want;
@@ -118,8 +184,8 @@ std::vector<std::string> check_vector(const json& vector, Tally& tally) {
     if (want.empty()) want.push_back({{"verdict", "ignored"}});
   }
   const std::string stream = kind == "line" ? input + "\n" : input;
-  const json fw = as_list(firmware_verdicts(stream));
-  const json host = as_list(host_verdicts(stream, stream.size()));
+  const json fw = as_list(firmware_verdicts(stream, mode));
+  const json host = as_list(host_verdicts(stream, stream.size(), mode));
 
   ++tally.vectors;
   tally.firmware_ok += fw == want;
@@ -129,21 +195,21 @@ std::vector<std::string> check_vector(const json& vector, Tally& tally) {
     problems.push_back(id + ": expected " + want.dump() + "\n    firmware: " + fw.dump() + "\n    host:     " + host.dump());
   }
   for (std::size_t cut = 0; cut < stream.size() && kind == "stream"; ++cut) {
-    if (as_list(host_verdicts(stream, cut)) != host) problems.push_back(id + ": host verdicts change when the stream is split at byte " + std::to_string(cut));
+    if (as_list(host_verdicts(stream, cut, mode)) != host) problems.push_back(id + ": host verdicts change when the stream is split at byte " + std::to_string(cut));
   }
 
   // The host alone: canonical form, re-encoding and lint of accepted lines.
   if (kind == "line" && expect.at("verdict") == "accepted") {
-    const auto decoded = hmc::decode(input);
+    const auto decoded = hmc::decode(input, mode);
     if (decoded) {
-      const std::string again = hmc::encode(decoded->command).value();
+      const std::string again = hmc::encode(decoded->command, mode).value();
       if (decoded->canonical != expect.at("canonical").get<bool>()) {
         problems.push_back(id + ": host says canonical=" + std::to_string(decoded->canonical));
       }
       if (expect.at("canonical").get<bool>() && again != input) {
         problems.push_back(id + ": encode(decode(input)) gave " + again);
       }
-      if (!(hmc::decode(again).ok() && hmc::decode(again)->command == decoded->command)) {
+      if (!(hmc::decode(again, mode).ok() && hmc::decode(again, mode)->command == decoded->command)) {
         problems.push_back(id + ": the canonical form " + again + " does not decode to the same command");
       }
       std::vector<std::string> warned;
@@ -155,13 +221,14 @@ std::vector<std::string> check_vector(const json& vector, Tally& tally) {
   }
   if (vector.contains("as_input")) {
     const json& a = vector.at("as_input");
-    const auto typed = hmc::parse_input(input);
+    const auto typed = hmc::parse_input(input, mode);
     if (a.at("verdict") == "accepted") {
       if (!typed) {
         problems.push_back(id + ": as input, refused: " + typed.error().message);
       } else {
         if (hmc::command_to_json(*typed) != a.at("command")) problems.push_back(id + ": as input, gave " + hmc::command_to_json(*typed).dump());
-        if (hmc::encode(*typed).value() != a.at("frame")) problems.push_back(id + ": as input, framed as " + hmc::encode(*typed).value());
+        const std::string framed = hmc::encode(*typed, mode).value();
+        if (framed != a.at("frame")) problems.push_back(id + ": as input, framed as " + framed);
       }
     } else if (typed || proto::reason_spec(typed.error().reason).name != a.at("reason")) {
       problems.push_back(id + ": as input, expected refusal " + a.at("reason").dump() + ", got " +
@@ -189,6 +256,11 @@ void run_file(const std::string& name, std::size_t minimum_vectors) {
   }
   std::cout << name << ": " << tally.vectors << " vectors; firmware parser matches " << tally.firmware_ok
             << ", host codec matches " << tally.host_ok << ", parsers agree on " << tally.agree << "\n";
+  if (tally.board_lines > 0) {
+    std::cout << name << ": " << tally.board_lines << " board lines; host board decoder matches "
+              << tally.board_host_ok << ", firmware reply writer writes " << tally.board_writer_ok << " of "
+              << tally.board_written << " canonical frames\n";
+  }
 }
 
 }  // namespace
@@ -216,3 +288,26 @@ TEST_CASE("spec examples: every frame printed in the spec") {
 }
 
 TEST_CASE("edge cases: our decisions on the spec's quirks") { run_file("edge_cases.json", 80); }
+
+TEST_CASE("protocol v2: new commands, CRC-16 mode and board frames") {
+  const json file = load("v2_frames.json");
+  std::set<std::string> kinds, commands, board_frames;
+  bool crc = false;
+  for (const json& v : file.at("vectors")) {
+    kinds.insert(v.at("kind").get<std::string>());
+    crc = crc || v.value("checksum_mode", "sum") == "crc16";
+    const json& e = v.at("expect");
+    if (e.is_object() && e.at("verdict") == "accepted") {
+      if (e.contains("command")) commands.insert(e.at("command").at("name").get<std::string>());
+      if (e.contains("frame")) board_frames.insert(e.at("frame").at("name").get<std::string>());
+    }
+  }
+  // Every v2 command and every board frame is accepted by some vector, in some mode.
+  for (const auto& c : proto::kCommands) {
+    if (c.id >= proto::CommandId::kVersion) CHECK(commands.count(c.name) == 1);
+  }
+  for (const auto& f : proto::kBoardFrames) CHECK(board_frames.count(f.name) == 1);
+  CHECK(crc);
+  CHECK(kinds == std::set<std::string>{"line", "stream", "board_line"});
+  run_file("v2_frames.json", 150);
+}

@@ -1,5 +1,6 @@
-// Controller: what accepted frames do, the rules that refuse them, switches, timers and the
-// self-test (controller.h). Runs in the main loop except on_switch_change().
+// Controller: lines and their replies, servos, LED strips, queries, settings, switches, timers
+// and events (controller.h). Motion lives in controller_motion.cpp. Runs in the main loop except
+// on_switch_change().
 #include "controller.h"
 
 #include "reply_writer.h"
@@ -7,24 +8,12 @@
 namespace hmc::fw {
 namespace {
 
+using proto::BoardFrameId;
 using proto::Reason;
 
 constexpr hal::Ticks ms_to_ticks(uint32_t ms) {
   return static_cast<hal::Ticks>(ms) * (hal::kTicksPerSecond / 1000u);
 }
-
-// The token a rule refusal concerns (docs/protocol.md, "Replies").
-constexpr uint8_t kTokenDir = proto::kTokenFirstValue + 1;
-constexpr uint8_t kTokenDelay = proto::kTokenFirstValue + 4;
-
-// Ticks per step for `delay_us`, or 0 when the timer cannot produce it.
-uint32_t interval_for(uint32_t delay_us) {
-  const uint64_t ticks = static_cast<uint64_t>(delay_us) * hal::kTicksPerMicrosecond;
-  if (ticks < kMinIntervalTicks || ticks > 0xFFFFFFFFu) return 0;
-  return static_cast<uint32_t>(ticks);
-}
-
-uint32_t rate_for(uint32_t delay_us) { return (1000000u + delay_us - 1u) / delay_us; }
 
 }  // namespace
 
@@ -39,6 +28,10 @@ Controller::Controller(const Board& board, const ControllerOptions& options)
       emergency_(false),
       limits_{},
       servo_release_at_{},
+      servo_pulse_{},
+      strips_{},
+      driver_check_at_(0),
+      next_mode_(proto::ChecksumMode::kSum),
       boot_led_at_(0),
       boot_led_left_(true),
       tune_(nullptr),
@@ -51,15 +44,17 @@ Controller::Controller(const Board& board, const ControllerOptions& options)
     mo.state = MotorState::kIdle;
     mo.microstep = kBootMicrostep;
     mo.toward = kNoEnd;
+    for (uint32_t i = 0; i < proto::kSettingCount; ++i) mo.settings[i] = proto::kSettings[i].initial;
   }
 }
 
 void Controller::boot() {
   for (uint8_t motor = 1; motor <= proto::kMotorCount; ++motor) {
+    const Motor& mo = motors_[index(motor)];
     drv8711::Drv8711& driver = drivers_[index(motor)];
     driver.reset_settings();
-    driver.set_current_ma(kBootCurrentMa);
-    driver.set_decay_mode(drv8711::DecayMode::kAutoMixed);
+    driver.set_current_ma(mo.settings[proto::kSettingCurrent - 1]);
+    driver.set_decay_mode(static_cast<drv8711::DecayMode>(mo.settings[proto::kSettingDecay - 1]));
     driver.set_step_mode(kBootMicrostep);
     driver.enable();
     motors_[index(motor)].seen_finished = scheduler_.finished(motor);
@@ -67,21 +62,24 @@ void Controller::boot() {
   for (uint8_t strip = 1; strip <= proto::kStripCount; ++strip) board_.leds.set_color(strip, 0, 0, 0, 0);
   const hal::Ticks now = board_.timer.now();
   for (uint8_t servo = 1; servo <= proto::kServoCount; ++servo) {
-    board_.servos.set_pulse(servo, servo_pulse_us(90));
+    servo_pulse_[servo - 1] = servo_pulse_us(90);
+    board_.servos.set_pulse(servo, servo_pulse_[servo - 1]);
     servo_release_at_[servo - 1] = now + ms_to_ticks(kServoHoldMs);
   }
   play(kBootTune, sizeof(kBootTune) / sizeof(kBootTune[0]));
   boot_led_left_ = true;
   board_.boot_leds.set(true, false);
   boot_led_at_ = now + ms_to_ticks(kBootLedPeriodMs);
+  driver_check_at_ = now + ms_to_ticks(kDriverCheckMs);
+  const uint32_t booted[] = {proto::kProtocolVersion, proto::kFirmwareVersion};
+  send(BoardFrameId::kBooted, booted);
   check_switches();
 
   if (!options_.self_test || emergency_) return;
   for (uint8_t motor = 1; motor <= proto::kMotorCount; ++motor) {
     const MoveSpec forward{false, static_cast<uint16_t>(kBootMicrostep), kSelfTestSteps,
-                           interval_for(kSelfTestDelayUs), 0};
-    if (start_move(motor, forward, rate_for(kSelfTestDelayUs), MotorState::kSelfTest) ==
-        Reason::kOk) {
+                           kSelfTestDelayUs * hal::kTicksPerMicrosecond, 0};
+    if (start_move(motor, forward, 1000000u / kSelfTestDelayUs, MotorState::kSelfTest) == Reason::kOk) {
       self_test_phase_ = 1;
     }
   }
@@ -93,23 +91,31 @@ void Controller::poll() {
     if (parser_.feed(static_cast<uint8_t>(byte))) handle_line(parser_.verdict());
   }
   check_motions();
-  run_timers(board_.timer.now());
+  const hal::Ticks now = board_.timer.now();
+  check_drivers(now);
+  run_timers(now);
 }
 
 void Controller::on_switch_change() {
   if (board_.switches.emergency_pressed()) {
+    for (Motor& mo : motors_) mo.halt_cause = proto::kEndEmergency;
     scheduler_.halt_all();
     return;
   }
   for (uint8_t motor = 1; motor <= proto::kMotorCount; ++motor) {
-    const uint8_t end = motors_[index(motor)].toward;
-    if (end != kNoEnd && board_.switches.limit_pressed(motor, end)) scheduler_.halt(motor);
+    Motor& mo = motors_[index(motor)];
+    const uint8_t end = mo.toward;
+    if (end != kNoEnd && board_.switches.limit_pressed(motor, end)) {
+      mo.halt_cause = proto::kEndLimit;
+      scheduler_.halt(motor);
+    }
   }
 }
 
 bool Controller::set_acceleration(uint8_t motor, uint32_t steps_per_s2) {
   if (motor < 1 || motor > proto::kMotorCount) return false;
-  motors_[index(motor)].accel = steps_per_s2;
+  if (steps_per_s2 > proto::kSettings[proto::kSettingAccel - 1].max) return false;
+  motors_[index(motor)].settings[proto::kSettingAccel - 1] = steps_per_s2;
   return true;
 }
 
@@ -120,18 +126,26 @@ void Controller::handle_line(const Verdict& verdict) {
   check_motions();  // a motion that ended before this line no longer counts as running
   Refusal refusal{verdict.reason, verdict.token};
   uint8_t offset = verdict.offset;
+  next_mode_ = parser_.checksum_mode();
+  const bool query = verdict.reason == Reason::kOk &&
+                     (verdict.command.id == proto::CommandId::kVersion ||
+                      verdict.command.id == proto::CommandId::kStatus ||
+                      verdict.command.id == proto::CommandId::kGet);
   if (verdict.reason == Reason::kOk) {
     refusal = execute(verdict.command);
     if (refusal.reason != Reason::kOk) offset = parser_.token_offset(refusal.token);
   }
   if (refusal.reason == Reason::kOk) {
     ++accepted_;
-    if (options_.replies) write_ack(board_.serial);
-    return;
+    if (!query && options_.replies) write_ack(board_.serial, parser_.checksum_mode());
+  } else {
+    ++refused_;
+    play(kWarningTune, sizeof(kWarningTune) / sizeof(kWarningTune[0]));
+    if (options_.replies) {
+      write_nak(board_.serial, refusal.reason, refusal.token, offset, parser_.checksum_mode());
+    }
   }
-  ++refused_;
-  play(kWarningTune, sizeof(kWarningTune) / sizeof(kWarningTune[0]));
-  if (options_.replies) write_nak(board_.serial, refusal.reason, refusal.token, offset);
+  parser_.set_checksum_mode(next_mode_);  // a CRC frame's own reply uses the old mode
 }
 
 Controller::Refusal Controller::execute(const Command& command) {
@@ -142,205 +156,150 @@ Controller::Refusal Controller::execute(const Command& command) {
       return servo(command.servo);
     case proto::CommandId::kLed:
       return led(command.led);
+    case proto::CommandId::kVersion:
+      answer_version();
+      return {};
+    case proto::CommandId::kStatus:
+      answer_status(command.status.unit);
+      return {};
+    case proto::CommandId::kSet:
+      return set(command.setting);
+    case proto::CommandId::kGet: {
+      const uint32_t values[] = {command.setting.motor, command.setting.setting,
+                                 setting(command.setting.motor, command.setting.setting)};
+      send(BoardFrameId::kSettingValue, values);
+      return {};
+    }
+    case proto::CommandId::kLimits:
+      return limits(command.limits);
+    case proto::CommandId::kChecksumMode:
+      next_mode_ = static_cast<proto::ChecksumMode>(command.checksum_mode.mode);
+      return {};
   }
   return {Reason::kUnknownCommand, proto::kTokenName};
-}
-
-Controller::Refusal Controller::stepper(const StepperCommand& command) {
-  const uint8_t motor = command.motor;
-  if (command.dir == proto::kActionStop) {
-    abort_self_test();
-    stop_motor(motor);
-    return {};
-  }
-  if (emergency_) return {Reason::kEmergencyStop, proto::kTokenName};
-  abort_self_test();
-  if (command.dir == proto::kActionHome) return home(command);
-
-  const bool reverse = command.dir == proto::kActionReverse;
-  const uint8_t end = reverse ? 0 : 1;
-  if (proto::motor_has_switches(motor) && limits_[index(motor)][end]) {
-    return {Reason::kLimitPressed, kTokenDir};
-  }
-  const uint32_t interval = interval_for(command.delay_us);
-  if (interval == 0) return {Reason::kRateLimit, kTokenDelay};
-  const MoveSpec move{reverse, static_cast<uint16_t>(command.microstep), command.steps, interval,
-                      motors_[index(motor)].accel};
-  return {start_move(motor, move, rate_for(command.delay_us), MotorState::kMoving), kTokenDelay};
-}
-
-Controller::Refusal Controller::home(const StepperCommand& command) {
-  const uint8_t motor = command.motor;
-  if (any_moving()) return {Reason::kMotorsRunning, kTokenDir};
-  Motor& mo = motors_[index(motor)];
-  if (limits_[index(motor)][0]) {  // already on the home switch
-    scheduler_.set_position(motor, 0);
-    mo.homed = true;
-    return {};
-  }
-  const uint32_t delay_us = command.delay_us != 0 ? command.delay_us : kHomingDelayUs;
-  const uint32_t interval = interval_for(delay_us);
-  if (interval == 0) return {Reason::kRateLimit, kTokenDelay};
-  const uint32_t microstep = command.microstep != 0 ? command.microstep : mo.microstep;
-  // Homing seeks at constant rate: the switch halts it where it closed.
-  const MoveSpec seek{true, static_cast<uint16_t>(microstep), command.steps, interval, 0};
-  mo.homed = false;
-  return {start_move(motor, seek, rate_for(delay_us), MotorState::kHoming), kTokenDelay};
 }
 
 Controller::Refusal Controller::servo(const ServoCommand& command) {
   if (emergency_) return {Reason::kEmergencyStop, proto::kTokenName};
   if (options_.legacy && any_moving()) return {Reason::kBusy, proto::kTokenName};
-  board_.servos.set_pulse(command.servo, servo_pulse_us(command.angle));
+  servo_pulse_[command.servo - 1] = servo_pulse_us(command.angle);
+  board_.servos.set_pulse(command.servo, servo_pulse_[command.servo - 1]);
   servo_release_at_[command.servo - 1] = board_.timer.now() + ms_to_ticks(kServoHoldMs);
   return {};
 }
 
 Controller::Refusal Controller::led(const LedCommand& command) {
   if (options_.legacy && any_moving()) return {Reason::kBusy, proto::kTokenName};
+  uint8_t* colour = strips_[command.strip - 1];
+  colour[0] = command.r, colour[1] = command.g, colour[2] = command.b, colour[3] = command.w;
   board_.leds.set_color(command.strip, command.r, command.g, command.b, command.w);
   return {};
 }
 
 // ---------------------------------------------------------------------------------------
-// Motion
+// Settings and queries
 
-// Starts `move`, or, when it needs the motor at rest first (another microstep or the other
-// direction), stops the motor and keeps the move until it rests (check_motions).
-Reason Controller::start_move(uint8_t motor, const MoveSpec& move, uint32_t rate,
-                              MotorState state) {
-  Motor& mo = motors_[index(motor)];
-  if (!within_budget(motor, rate, move.accel)) return Reason::kRateLimit;
-  const bool running = scheduler_.is_running(motor);
-  if (running && (move.microstep != mo.microstep || move.reverse != mo.reverse)) {
-    scheduler_.stop(motor);
-    mo.pending = move;
-    mo.pending_rate = rate;
-    mo.pending_state = state;
-    mo.state = MotorState::kChanging;
-    return Reason::kOk;
+Controller::Refusal Controller::set(const SettingCommand& command) {
+  Motor& mo = motors_[index(command.motor)];
+  drv8711::Drv8711& driver = drivers_[index(command.motor)];
+  switch (command.setting) {
+    case proto::kSettingCurrent:
+      driver.set_current_ma(command.value);
+      break;
+    case proto::kSettingDecay:
+      driver.set_decay_mode(static_cast<drv8711::DecayMode>(command.value));
+      break;
+    default:
+      break;
   }
-  if (!running && move.microstep != mo.microstep) {
-    drivers_[index(motor)].set_step_mode(move.microstep);
-    mo.microstep = move.microstep;
-  }
-  // Set before the move starts, so the switch interrupt can halt it from its first step.
-  mo.toward = proto::motor_has_switches(motor) ? (move.reverse ? 0 : 1) : kNoEnd;
-  if (scheduler_.start(motor, move) != StepStatus::kOk) {
-    if (!running) mo.toward = kNoEnd;
-    return Reason::kRateLimit;  // the plan's limits: interval, acceleration, ramp length
-  }
-  mo.reverse = move.reverse;
-  mo.rate = rate;
-  mo.state = state;
-  return Reason::kOk;
+  mo.settings[command.setting - 1] = command.value;
+  return {};
 }
 
-bool Controller::within_budget(uint8_t motor, uint32_t rate, uint32_t accel) const {
-  uint32_t sum = rate;
-  bool ramping = accel != 0;
-  for (uint8_t other = 1; other <= proto::kMotorCount; ++other) {
-    const Motor& mo = motors_[index(other)];
-    if (other == motor || !scheduler_.is_running(other)) continue;
-    const bool changing = mo.state == MotorState::kChanging;
-    const uint32_t other_rate = changing && mo.pending_rate > mo.rate ? mo.pending_rate : mo.rate;
-    sum += other_rate;
-    ramping = ramping || mo.accel != 0;
+Controller::Refusal Controller::limits(const LimitsCommand& command) {
+  Motor& mo = motors_[index(command.motor)];
+  mo.soft_low = command.low_sign != 0 ? -static_cast<int64_t>(command.low) : command.low;
+  mo.soft_high = command.high_sign != 0 ? -static_cast<int64_t>(command.high) : command.high;
+  mo.soft_limits = mo.soft_low < mo.soft_high;
+  return {};
+}
+
+void Controller::answer_version() {
+  const uint32_t values[] = {proto::kProtocolVersion,
+                             proto::kFirmwareVersion,
+                             options_.legacy ? 1u : 0u,
+                             proto::kLineMax,
+                             kMaxStepRate,
+                             proto::kMotorCount * 100 + proto::kServoCount * 10 + proto::kStripCount,
+                             (proto::motor_has_switches(1) ? 1u : 0u) | (proto::motor_has_switches(2) ? 2u : 0u) |
+                                 (proto::motor_has_switches(3) ? 4u : 0u),
+                             static_cast<uint32_t>(parser_.checksum_mode())};
+  send(BoardFrameId::kVersion, values);
+}
+
+void Controller::answer_status(uint8_t unit) {
+  if (unit >= proto::kUnitFirstStrip) {
+    const uint8_t* c = strips_[unit - proto::kUnitFirstStrip];
+    const uint32_t values[] = {static_cast<uint32_t>(unit - proto::kUnitFirstStrip + 1), c[0], c[1], c[2], c[3]};
+    send(BoardFrameId::kStripStatus, values);
+    return;
   }
-  return sum <= (ramping ? kMaxRampingStepRate : kMaxStepRate);
-}
-
-bool Controller::any_moving() const {
-  for (uint8_t motor = 1; motor <= proto::kMotorCount; ++motor) {
-    if (scheduler_.is_running(motor)) return true;
-  }
-  return false;
-}
-
-void Controller::stop_motor(uint8_t motor) {
-  Motor& mo = motors_[index(motor)];
-  if (mo.state == MotorState::kChanging) mo.state = MotorState::kMoving;  // drop the waiting move
-  scheduler_.stop(motor);
-}
-
-void Controller::abort_self_test() {
-  if (self_test_phase_ == 0) return;
-  self_test_phase_ = 0;
-  for (uint8_t motor = 1; motor <= proto::kMotorCount; ++motor) {
-    Motor& mo = motors_[index(motor)];
-    if (mo.state != MotorState::kSelfTest) continue;
-    scheduler_.halt(motor);
-    mo.state = MotorState::kMoving;  // ends like any move (check_motions)
-  }
-}
-
-// Bookkeeping for motions that ended: homing completes, a waiting move starts.
-void Controller::check_motions() {
-  for (uint8_t motor = 1; motor <= proto::kMotorCount; ++motor) {
-    Motor& mo = motors_[index(motor)];
-    const uint32_t finished = scheduler_.finished(motor);
-    if (finished == mo.seen_finished) continue;
-    mo.seen_finished = finished;
-    if (scheduler_.is_running(motor)) continue;  // an earlier motion; the one running is newer
-    switch (mo.state) {
-      case MotorState::kHoming:
-        if (limits_[index(motor)][0] || board_.switches.limit_pressed(motor, 0)) {
-          scheduler_.set_position(motor, 0);
-          mo.homed = true;
-        }
-        break;
-      case MotorState::kChanging: {
-        mo.state = MotorState::kIdle;
-        mo.rate = 0;
-        mo.toward = kNoEnd;
-        const uint8_t end = mo.pending.reverse ? 0 : 1;
-        const bool blocked = proto::motor_has_switches(motor) && limits_[index(motor)][end];
-        if (!emergency_ && !blocked) start_move(motor, mo.pending, mo.pending_rate, mo.pending_state);
-        continue;
+  if (unit == proto::kUnitBoard) {
+    uint32_t mask = 0;
+    for (uint8_t motor = 1; motor <= proto::kMotorCount; ++motor) {
+      for (uint8_t end = 0; end < 2; ++end) {
+        if (limits_[index(motor)][end]) mask |= 1u << (2u * index(motor) + end);
       }
-      case MotorState::kSelfTest:
-        continue;  // advance_self_test() decides
-      default:
-        break;
     }
-    mo.state = MotorState::kIdle;
-    mo.rate = 0;
-    mo.toward = kNoEnd;
+    const uint32_t values[] = {emergency_ ? 1u : 0u, mask, servo_pulse_[0], servo_pulse_[1]};
+    send(BoardFrameId::kBoardStatus, values);
+    return;
   }
-  advance_self_test();
-}
-
-// Phase 1 runs every motor forward; when all rest, phase 2 brings each back as far as it went.
-void Controller::advance_self_test() {
-  if (self_test_phase_ == 0) return;
-  for (uint8_t motor = 1; motor <= proto::kMotorCount; ++motor) {
-    if (motors_[index(motor)].state == MotorState::kSelfTest && scheduler_.is_running(motor)) return;
-  }
-  const bool back = self_test_phase_ == 1;
-  self_test_phase_ = 0;
-  for (uint8_t motor = 1; motor <= proto::kMotorCount; ++motor) {
-    Motor& mo = motors_[index(motor)];
-    if (mo.state != MotorState::kSelfTest) continue;
-    mo.state = MotorState::kIdle;
-    mo.rate = 0;
-    mo.toward = kNoEnd;
-    const uint32_t steps = scheduler_.steps_done(motor);
-    if (!back || steps == 0 || emergency_ || limits_[index(motor)][0]) continue;
-    const MoveSpec reverse{true, static_cast<uint16_t>(kBootMicrostep), steps,
-                           interval_for(kSelfTestDelayUs), 0};
-    if (start_move(motor, reverse, rate_for(kSelfTestDelayUs), MotorState::kSelfTest) ==
-        Reason::kOk) {
-      self_test_phase_ = 2;
-    }
-  }
+  const Motor& mo = motors_[index(unit)];
+  int32_t target = 0;
+  const bool endless = !scheduler_.target(unit, target);
+  uint32_t log2_microstep = 0;
+  while ((1u << log2_microstep) < mo.microstep) ++log2_microstep;
+  const uint32_t flags = (mo.homed ? 1u : 0u) | (limits_[index(unit)][0] ? 2u : 0u) |
+                         (limits_[index(unit)][1] ? 4u : 0u) | (endless ? 8u : 0u) | (log2_microstep << 4);
+  uint32_t values[8] = {unit, static_cast<uint32_t>(mo.state)};
+  put_signed(values + 2, scheduler_.position(unit));
+  put_signed(values + 4, endless ? scheduler_.position(unit) : target);
+  values[6] = scheduler_.rate(unit);
+  values[7] = flags;
+  send(BoardFrameId::kMotorStatus, values);
 }
 
 // ---------------------------------------------------------------------------------------
-// Switches and timers
+// Events
+
+void Controller::send(BoardFrameId id, const uint32_t* values) {
+  if (options_.replies) write_frame(board_.serial, id, values, parser_.checksum_mode());
+}
+
+void Controller::send_motion_ended(uint8_t motor, uint32_t how) {
+  uint32_t values[4] = {motor, how};
+  put_signed(values + 2, scheduler_.position(motor));
+  send(BoardFrameId::kMotionEnded, values);
+}
+
+void Controller::send_homing_ended(uint8_t motor, bool homed) {
+  uint32_t values[4] = {motor, homed ? 1u : 0u};
+  put_signed(values + 2, scheduler_.position(motor));
+  send(BoardFrameId::kHomingEnded, values);
+}
+
+// ---------------------------------------------------------------------------------------
+// Switches, drivers and timers
 
 void Controller::check_switches() {
   const bool emergency = board_.switches.emergency_pressed();
+  if (emergency != emergency_) {
+    const uint32_t pressed[] = {emergency ? 1u : 0u};
+    send(BoardFrameId::kEmergencyChanged, pressed);
+  }
   if (emergency && !emergency_) {
+    for (Motor& mo : motors_) mo.halt_cause = proto::kEndEmergency;
     scheduler_.halt_all();
     self_test_phase_ = 0;
     for (Motor& mo : motors_) {
@@ -352,14 +311,38 @@ void Controller::check_switches() {
   emergency_ = emergency;
   for (uint8_t motor = 1; motor <= proto::kMotorCount; ++motor) {
     if (!proto::motor_has_switches(motor)) continue;
+    Motor& mo = motors_[index(motor)];
     for (uint8_t end = 0; end < 2; ++end) {
-      limits_[index(motor)][end] = board_.switches.limit_pressed(motor, end);
+      const bool pressed = board_.switches.limit_pressed(motor, end);
+      if (pressed != limits_[index(motor)][end]) {
+        const uint32_t values[] = {motor, end, pressed ? 1u : 0u};
+        send(BoardFrameId::kLimitChanged, values);
+      }
+      limits_[index(motor)][end] = pressed;
     }
     // The interrupt halts at the edge; this covers a switch found pressed by polling alone.
-    const uint8_t toward = motors_[index(motor)].toward;
+    const uint8_t toward = mo.toward;
     if (toward != kNoEnd && limits_[index(motor)][toward] && scheduler_.is_running(motor)) {
+      mo.halt_cause = proto::kEndLimit;
       scheduler_.halt(motor);
     }
+  }
+}
+
+// Reads each driver's STATUS; a fault not yet reported is sent once (EVF) and cleared, so a
+// fault still present latches again and is reported again after it went away.
+void Controller::check_drivers(hal::Ticks now) {
+  if (now < driver_check_at_) return;
+  driver_check_at_ = now + ms_to_ticks(kDriverCheckMs);
+  for (uint8_t motor = 1; motor <= proto::kMotorCount; ++motor) {
+    Motor& mo = motors_[index(motor)];
+    const uint8_t bits = static_cast<uint8_t>(drivers_[index(motor)].read_register(drv8711::Register::kStatus));
+    if (bits != 0 && bits != mo.fault_reported) {
+      const uint32_t values[] = {motor, bits};
+      send(BoardFrameId::kDriverFault, values);
+      drivers_[index(motor)].clear_status();
+    }
+    mo.fault_reported = bits;
   }
 }
 
@@ -368,6 +351,7 @@ void Controller::run_timers(hal::Ticks now) {
     hal::Ticks& at = servo_release_at_[servo - 1];
     if (at != 0 && now >= at) {
       board_.servos.release(servo);
+      servo_pulse_[servo - 1] = 0;
       at = 0;
     }
   }

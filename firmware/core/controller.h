@@ -17,8 +17,12 @@
 //  - The board's step interrupt has a budget (kMaxStepRate): a move whose rate would take the
 //    sum of the commanded rates above it is refused, as is a delay the timer cannot count.
 //  - Every refused line sounds the warning tone. With Options::replies every line is answered
-//    in order (reply_writer.h): ACK, or NAK with the reason, token and offset.
-//
+//    in order (reply_writer.h): ACK, NAK with the reason, token and offset, or the answer to a
+//    query (VER, STA → STA/STB/STL, GET → SET); events (EVB, EVD, EVH, EVL, EVE, EVF) are sent
+//    as things happen. Without replies the board is silent, as the seed is.
+//  - Protocol v2 settings per motor (SET/GET, proto::kSettings): current, decay, acceleration,
+//    max rate, homing end, seek rate, pull-off and slow locate; soft limits (LIM); the checksum
+//    mode (CRC), switched after its own ACK.
 // Contexts: boot() and poll() run in the main loop; on_step_timer() is the step timer's
 // interrupt; on_switch_change() is the switches' interrupt (lower priority than the step timer).
 // Freestanding: no heap; every buffer is a member.
@@ -59,14 +63,17 @@ struct ControllerOptions {
 inline constexpr uint32_t kMaxStepRate = 50000;
 inline constexpr uint32_t kMaxRampingStepRate = 40000;  // when any moving motor ramps
 
-// Homing with delay 0 / microstep 0 (the spec's `STX#6#STM#1#3#0#0#0#4#ETX`) uses these.
-inline constexpr uint32_t kHomingDelayUs = 500;
+// Homing with delay 0 uses the setting home_seek_us (500 µs at boot), microstep 0 keeps the
+// current microstep (the spec's `STX#6#STM#1#3#0#0#0#4#ETX`). Current and decay at boot are the
+// settings' initial values (proto::kSettings: 1000 mA, a safe current for any 36v4-driven
+// motor; auto-mixed decay, the seed's).
 inline constexpr uint32_t kBootMicrostep = 16;     // MODE written at boot
-inline constexpr uint32_t kBootCurrentMa = 1000;   // a safe current for any 36v4-driven motor
 // A servo's pulse train stops this long after its last SVM (the seed detaches to stop jitter;
 // 160° at a typical 0.1 s/60° takes ≈ 0.27 s).
 inline constexpr uint32_t kServoHoldMs = 500;
 inline constexpr uint32_t kBootLedPeriodMs = 1000;
+// DRV8711 STATUS is read this often; a new fault is reported once (EVF).
+inline constexpr uint32_t kDriverCheckMs = 100;
 // Self-test: half a turn (100 full steps) at kBootMicrostep, forward then back.
 inline constexpr uint32_t kSelfTestSteps = 100 * kBootMicrostep;
 inline constexpr uint32_t kSelfTestDelayUs = 250;
@@ -108,7 +115,7 @@ class Controller {
   void on_switch_change();
 
   // Per-motor acceleration in steps/s² (0: constant rate, the seed's behaviour) for moves that
-  // start after the call. False for a bad motor.
+  // start after the call, as SET accel does. False for a bad motor or value.
   bool set_acceleration(uint8_t motor, uint32_t steps_per_s2);
 
   // For the simulator, tests and status.
@@ -117,24 +124,33 @@ class Controller {
   uint32_t microstep(uint8_t motor) const { return motors_[index(motor)].microstep; }
   bool homed(uint8_t motor) const { return motors_[index(motor)].homed; }
   bool self_test_running() const { return self_test_phase_ != 0; }
+  uint32_t setting(uint8_t motor, uint8_t id) const { return motors_[index(motor)].settings[id - 1]; }
+  proto::ChecksumMode checksum_mode() const { return parser_.checksum_mode(); }
   uint32_t lines_accepted() const { return accepted_; }
   uint32_t lines_refused() const { return refused_; }
   const StepScheduler& scheduler() const { return scheduler_; }
   const drv8711::Drv8711& driver(uint8_t motor) const { return drivers_[index(motor)]; }
 
  private:
+  enum class HomePhase : uint8_t { kSeek, kPullOff, kLocate };
   struct Motor {
     MotorState state;
     uint32_t microstep;      // MODE last written
-    uint32_t accel;
     uint32_t rate;           // commanded steps/s of the current move, 0 at rest
     uint32_t seen_finished;  // scheduler.finished() last handled
     bool homed;
     volatile uint8_t toward; // switch end the motor moves toward: 0, 1, or kNoEnd
+    volatile uint8_t halt_cause;  // proto::kEndLimit / kEndEmergency when a switch halted it
     bool reverse;            // direction of the move last started
+    HomePhase home_phase;
+    uint32_t home_delay_us;  // the seek's delay, reused by the pull-off
     MoveSpec pending;        // kChanging: the move to start once the motor rests
     uint32_t pending_rate;
     MotorState pending_state;
+    uint32_t settings[proto::kSettingCount];
+    bool soft_limits;        // low < high
+    int64_t soft_low, soft_high;
+    uint8_t fault_reported;  // DRV8711 STATUS bits last reported
   };
   // A rule's verdict on an accepted frame: kOk, or the reason and the token it concerns.
   struct Refusal {
@@ -144,24 +160,36 @@ class Controller {
   static constexpr uint8_t kNoEnd = 0xFF;
   static uint8_t index(uint8_t motor) { return static_cast<uint8_t>(motor - 1u); }
 
+  // controller.cpp: lines, servos, LEDs, queries, settings, switches, timers, events.
   void handle_line(const Verdict& verdict);
   Refusal execute(const Command& command);
-  Refusal stepper(const StepperCommand& command);
-  Refusal home(const StepperCommand& command);
   Refusal servo(const ServoCommand& command);
   Refusal led(const LedCommand& command);
+  Refusal set(const SettingCommand& command);
+  Refusal limits(const LimitsCommand& command);
+  void answer_version();
+  void answer_status(uint8_t unit);
+  void check_switches();
+  void check_drivers(hal::Ticks now);
+  void run_timers(hal::Ticks now);
+  void play(const Note* tune, uint8_t count);
+  void next_note(hal::Ticks now);
+  void send(proto::BoardFrameId id, const uint32_t* values);
+  void send_motion_ended(uint8_t motor, uint32_t how);
+  void send_homing_ended(uint8_t motor, bool homed);
+
+  // controller_motion.cpp: moves, homing, the rate budget, soft limits, the self-test.
+  Refusal stepper(const StepperCommand& command);
+  Refusal home(const StepperCommand& command);
   proto::Reason start_move(uint8_t motor, const MoveSpec& move, uint32_t rate, MotorState state);
   bool within_budget(uint8_t motor, uint32_t rate, uint32_t accel) const;
   bool any_moving() const;
-  void abort_self_test();
   void stop_motor(uint8_t motor);
-
   void check_motions();
-  void check_switches();
-  void run_timers(hal::Ticks now);
+  void motion_ended(uint8_t motor);
+  void homing_step(uint8_t motor);
+  void abort_self_test();
   void advance_self_test();
-  void play(const Note* tune, uint8_t count);
-  void next_note(hal::Ticks now);
 
   Board board_;
   ControllerOptions options_;
@@ -173,6 +201,10 @@ class Controller {
   bool emergency_;
   bool limits_[proto::kMotorCount][2];
   hal::Ticks servo_release_at_[proto::kServoCount];  // 0: no pulse running
+  uint16_t servo_pulse_[proto::kServoCount];         // µs, 0 released
+  uint8_t strips_[proto::kStripCount][4];            // r, g, b, w
+  hal::Ticks driver_check_at_;
+  proto::ChecksumMode next_mode_;                    // CRC: applied after the line's reply
   hal::Ticks boot_led_at_;
   bool boot_led_left_;
   const Note* tune_;

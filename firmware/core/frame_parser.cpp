@@ -28,10 +28,22 @@ constexpr bool action_precedes_its_dependents(const CommandSpec& command) {
   return true;
 }
 
+// A setting's value follows the field that names the setting, whose range indexes kSettings.
+constexpr bool setting_values_follow_their_setting(const CommandSpec& command) {
+  for (uint32_t i = 0; i < command.value_count; ++i) {
+    if ((command.fields[i].flags & proto::kSettingValue) == 0) continue;
+    if (i == 0 || command.fields[i - 1].min < 1 || command.fields[i - 1].max > proto::kSettingCount) {
+      return false;
+    }
+  }
+  return true;
+}
+
 // Checks the command table against what this parser relies on.
 constexpr bool command_table_fits() {
   for (const CommandSpec& command : proto::kCommands) {
-    if (command.value_count > proto::kMaxValues || !action_precedes_its_dependents(command)) {
+    if (command.value_count > proto::kMaxValues || !action_precedes_its_dependents(command) ||
+        !setting_values_follow_their_setting(command)) {
       return false;
     }
   }
@@ -99,8 +111,13 @@ const CommandSpec* find_command(const uint8_t* line, const Span& name) {
   return nullptr;
 }
 
-// Whether a value suits its field, given the command's action (kNoAction when it has none).
-bool in_range(const FieldSpec& field, uint32_t value, uint32_t action) {
+// Whether a value suits its field, given the command's action (kNoAction when it has none) and
+// the value before it (a setting id, for a setting's value).
+bool in_range(const FieldSpec& field, uint32_t value, uint32_t action, uint32_t previous) {
+  if ((field.flags & proto::kSettingValue) != 0) {
+    const proto::SettingSpec& setting = proto::kSettings[previous - 1];
+    return value >= setting.min && value <= setting.max;
+  }
   if ((field.flags & proto::kUncheckedOnStop) != 0 && action == proto::kActionStop) return true;
   if ((field.flags & proto::kZeroAllowedOnHome) != 0 && action == proto::kActionHome &&
       value == 0) {
@@ -127,6 +144,23 @@ void fill_command(proto::CommandId id, const uint32_t* values, Command& command)
                      static_cast<uint8_t>(values[2]), static_cast<uint8_t>(values[3]),
                      static_cast<uint8_t>(values[4])};
       break;
+    case proto::CommandId::kVersion:
+      break;
+    case proto::CommandId::kStatus:
+      command.status = {static_cast<uint8_t>(values[0])};
+      break;
+    case proto::CommandId::kSet:
+    case proto::CommandId::kGet:
+      command.setting = {static_cast<uint8_t>(values[0]), static_cast<uint8_t>(values[1]),
+                         id == proto::CommandId::kSet ? values[2] : 0};
+      break;
+    case proto::CommandId::kLimits:
+      command.limits = {static_cast<uint8_t>(values[0]), static_cast<uint8_t>(values[1]), values[2],
+                        static_cast<uint8_t>(values[3]), values[4]};
+      break;
+    case proto::CommandId::kChecksumMode:
+      command.checksum_mode = {static_cast<uint8_t>(values[0])};
+      break;
   }
 }
 
@@ -151,7 +185,7 @@ bool give_verdict(Verdict& out, Reason reason, uint32_t token = 0, uint32_t offs
 // Steps 12 to 16 and acceptance: the values, checksum, ranges and switch of a frame whose
 // structure, length and name are right, so it has exactly value_count + 5 tokens.
 bool judge_values(const uint8_t* line, const Tokens& tokens, const CommandSpec& command,
-                  Verdict& out) {
+                  proto::ChecksumMode mode, Verdict& out) {
   const uint32_t count = command.value_count;
 
   // 12. Value numbers, summed mod 256 on the way.
@@ -165,20 +199,26 @@ bool judge_values(const uint8_t* line, const Tokens& tokens, const CommandSpec& 
     sum = (sum + values[i]) & 0xFFu;
   }
 
-  // 13. Checksum number.
+  // 13. Checksum number; in CRC-16 mode exactly kCrcDigits digits, so no digit can move across
+  // the '#' into the field the CRC does not cover.
   const uint32_t checksum_token = proto::kTokenFirstValue + count;
   const Span checksum_span = tokens.at(checksum_token);
+  const bool crc = mode == proto::ChecksumMode::kCrc16;
   uint32_t checksum = 0;
-  if (!read_number(line, checksum_span, checksum)) {
+  if (!read_number(line, checksum_span, checksum) ||
+      (crc && checksum_span.end - checksum_span.begin != proto::kCrcDigits)) {
     return give_verdict(out, Reason::kBadNumber, checksum_token, checksum_span.begin);
   }
-  if (checksum > proto::kChecksumMax) {
+  if (checksum > (crc ? proto::kCrcMax : proto::kChecksumMax)) {
     return give_verdict(out, Reason::kOutOfRange, checksum_token, checksum_span.begin, 0, checksum);
   }
 
-  // 14. Checksum.
-  if (checksum != sum) {
-    return give_verdict(out, Reason::kChecksumMismatch, checksum_token, checksum_span.begin, sum,
+  // 14. Checksum: the sum, or the CRC of the frame's bytes before the checksum field.
+  const Span start = tokens.at(proto::kTokenStart);
+  const uint32_t want =
+      crc ? proto::crc16(line + start.begin, checksum_span.begin - start.begin) : sum;
+  if (checksum != want) {
+    return give_verdict(out, Reason::kChecksumMismatch, checksum_token, checksum_span.begin, want,
                         checksum);
   }
 
@@ -186,7 +226,7 @@ bool judge_values(const uint8_t* line, const Tokens& tokens, const CommandSpec& 
   const uint32_t action =
       command.action_field < 0 ? kNoAction : values[static_cast<uint32_t>(command.action_field)];
   for (uint32_t i = 0; i < count; ++i) {
-    if (!in_range(command.fields[i], values[i], action)) {
+    if (!in_range(command.fields[i], values[i], action, i > 0 ? values[i - 1] : 0)) {
       return give_verdict(out, Reason::kOutOfRange, proto::kTokenFirstValue + i,
                           tokens.at(proto::kTokenFirstValue + i).begin, 0, values[i]);
     }
@@ -220,18 +260,37 @@ uint32_t command_values(const Command& command, uint32_t (&values)[proto::kMaxVa
       values[0] = c.strip, values[1] = c.r, values[2] = c.g, values[3] = c.b, values[4] = c.w;
       break;
     }
+    case proto::CommandId::kVersion:
+      break;
+    case proto::CommandId::kStatus:
+      values[0] = command.status.unit;
+      break;
+    case proto::CommandId::kSet:
+    case proto::CommandId::kGet: {
+      const SettingCommand& c = command.setting;
+      values[0] = c.motor, values[1] = c.setting, values[2] = c.value;
+      break;
+    }
+    case proto::CommandId::kLimits: {
+      const LimitsCommand& c = command.limits;
+      values[0] = c.motor, values[1] = c.low_sign, values[2] = c.low, values[3] = c.high_sign, values[4] = c.high;
+      break;
+    }
+    case proto::CommandId::kChecksumMode:
+      values[0] = command.checksum_mode.mode;
+      break;
   }
   return proto::command_spec(command.id).value_count;
 }
 
 // Starts with an empty line and an all-zero verdict; line_ needs no clearing, as only its first
 // length_ bytes are ever read.
-FrameParser::FrameParser() : length_(0), last_length_(0) { give_verdict(verdict_, Reason::kOk); }
+FrameParser::FrameParser() : length_(0), last_length_(0), mode_(proto::ChecksumMode::kSum) { give_verdict(verdict_, Reason::kOk); }
 
 // Stores the byte, or judges the line when the byte ends it.
 bool FrameParser::feed(uint8_t byte) {
   if (byte == '\r' || byte == '\n') {
-    const bool judged = parse_line(line_, length_, verdict_);
+    const bool judged = parse_line(line_, length_, verdict_, mode_);
     last_length_ = length_ < proto::kLineMax ? length_ : proto::kLineMax;
     length_ = 0;
     return judged;
@@ -253,7 +312,8 @@ uint8_t FrameParser::token_offset(uint8_t token) const {
 }
 
 // Steps 1 to 11 of the order of checks; judge_values() does the rest.
-bool FrameParser::parse_line(const uint8_t* line, uint32_t length, Verdict& out) {
+bool FrameParser::parse_line(const uint8_t* line, uint32_t length, Verdict& out,
+                             proto::ChecksumMode mode) {
   // 1. Length; nothing past the limit is read.
   if (length > proto::kLineMax) {
     return give_verdict(out, Reason::kLineTooLong, proto::kNoToken, proto::kLineMax);
@@ -322,7 +382,7 @@ bool FrameParser::parse_line(const uint8_t* line, uint32_t length, Verdict& out)
                         command_length, declared);
   }
 
-  return judge_values(line, tokens, *command, out);
+  return judge_values(line, tokens, *command, mode, out);
 }
 
 }  // namespace hmc::fw

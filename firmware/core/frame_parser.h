@@ -12,6 +12,7 @@
 
 #include <stdint.h>
 
+#include "crc16.h"
 #include "protocol_facts.h"
 
 namespace hmc::fw {
@@ -34,12 +35,39 @@ struct LedCommand {
   uint8_t r, g, b, w;
 };
 
+// Protocol v2 (VER has no values).
+struct StatusQuery {
+  uint8_t unit;  // 1..3 motor, proto::kUnitBoard, strips from proto::kUnitFirstStrip
+};
+
+struct SettingCommand {  // SET, and GET with value 0
+  uint8_t motor;
+  uint8_t setting;  // proto::SettingId
+  uint32_t value;
+};
+
+struct LimitsCommand {
+  uint8_t motor;
+  uint8_t low_sign;  // 0 plus, 1 minus
+  uint32_t low;      // 1/256 step
+  uint8_t high_sign;
+  uint32_t high;
+};
+
+struct ChecksumModeCommand {
+  uint8_t mode;  // proto::ChecksumMode
+};
+
 struct Command {
   proto::CommandId id;
   union {
     StepperCommand stepper;
     ServoCommand servo;
     LedCommand led;
+    StatusQuery status;
+    SettingCommand setting;
+    LimitsCommand limits;
+    ChecksumModeCommand checksum_mode;
   };
 };
 
@@ -59,6 +87,10 @@ class FrameParser {
  public:
   FrameParser();
 
+  // The checksum rule for lines from now on (the seed's sum at construction).
+  void set_checksum_mode(proto::ChecksumMode mode) { mode_ = mode; }
+  proto::ChecksumMode checksum_mode() const { return mode_; }
+
   // Takes the next byte of the stream. Returns true when it ended a non-blank line; the
   // line's verdict is then in verdict() until the next call.
   bool feed(uint8_t byte);
@@ -72,12 +104,14 @@ class FrameParser {
 
   // Judges one line (terminator excluded) of any length. Returns false for a blank line, which
   // gets no verdict. feed() uses this at every line end; tests and fuzzers may call it directly.
-  static bool parse_line(const uint8_t* line, uint32_t length, Verdict& out);
+  static bool parse_line(const uint8_t* line, uint32_t length, Verdict& out,
+                         proto::ChecksumMode mode = proto::ChecksumMode::kSum);
 
  private:
   uint8_t line_[proto::kLineMax];
   uint32_t length_;   // bytes received on the current line, counting those not stored
   uint32_t last_length_;  // stored bytes of the line last completed
+  proto::ChecksumMode mode_;
   Verdict verdict_;
 };
 

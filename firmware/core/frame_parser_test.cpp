@@ -412,3 +412,30 @@ TEST_CASE("random bytes always give verdicts within the protocol's bounds", "[fr
   REQUIRE_FALSE(last.empty());
   CHECK(last.back().reason == Reason::kOk);
 }
+
+TEST_CASE("in CRC-16 mode the checksum field is exactly 5 digits, zero-padded", "[frame_parser]") {
+  using hmc::proto::ChecksumMode;
+  // CRC-16 of "STX#3#SVM#1#90#" is 7353, of "STX#3#SVM#2#20#" 666.
+  auto crc_verdict = [](const std::string& line) {
+    INFO("line: " << line);
+    Verdict verdict{};
+    REQUIRE(FrameParser::parse_line(reinterpret_cast<const uint8_t*>(line.data()),
+                                    static_cast<uint32_t>(line.size()), verdict, ChecksumMode::kCrc16));
+    return verdict;
+  };
+  CHECK(crc_verdict("STX#3#SVM#1#90#07353#ETX").reason == Reason::kOk);
+  const Verdict padded = crc_verdict("STX#3#SVM#2#20#00666#ETX");
+  REQUIRE(padded.reason == Reason::kOk);
+  CHECK(unsigned{padded.command.servo.angle} == 20);
+  // Any other width is a bad_number at the checksum token, even when its value is the CRC.
+  check_refusal(crc_verdict("STX#3#SVM#1#90#7353#ETX"), Reason::kBadNumber, 5, 15, 0, 0);
+  check_refusal(crc_verdict("STX#3#SVM#1#90#007353#ETX"), Reason::kBadNumber, 5, 15, 0, 0);
+  check_refusal(crc_verdict("STX#3#SVM#2#20#666#ETX"), Reason::kBadNumber, 5, 15, 0, 0);
+  // A digit moved across the '#' into the checksum field no longer passes.
+  check_refusal(crc_verdict("STX#3#SVM#1#9#007353#ETX"), Reason::kBadNumber, 5, 14, 0, 0);
+  // Five digits above 65535 are still out_of_range; a wrong CRC is still a mismatch.
+  check_refusal(crc_verdict("STX#3#SVM#1#90#99999#ETX"), Reason::kOutOfRange, 5, 15, 0, 99999);
+  check_refusal(crc_verdict("STX#3#SVM#1#90#07354#ETX"), Reason::kChecksumMismatch, 5, 15, 7353, 7354);
+  // The seed's sum keeps any width of 1-10 digits.
+  require_servo("STX#3#SVM#1#90#0091#ETX", 1, 90);
+}

@@ -26,6 +26,10 @@ inline constexpr uint32_t kLineMax = 128;
 inline constexpr uint32_t kMaxValues = 8;
 // The checksum field's largest value.
 inline constexpr uint32_t kChecksumMax = 255;
+// In CRC-16 mode (docs/protocol.md "CRC-16 mode") the checksum field holds 0..kCrcMax.
+inline constexpr uint32_t kCrcMax = 65535;
+// In CRC-16 mode the checksum field is always exactly this many digits, zero-padded.
+inline constexpr uint32_t kCrcDigits = 5;
 // Token positions that do not depend on the command.
 inline constexpr uint8_t kTokenStart = 0;
 inline constexpr uint8_t kTokenLength = 1;
@@ -55,6 +59,7 @@ enum class Reason : uint8_t {
   kEmergencyStop = 13,    // motion while the emergency switch is pressed
   kBusy = 14,             // legacy mode: servo or LED while a stepper runs (seed rule [5])
   kRateLimit = 15,        // the step rate is beyond what the board can time
+  kSoftLimit = 16,        // the move would end outside the motor's soft travel limits
 };
 
 struct ReasonSpec {
@@ -80,6 +85,7 @@ inline constexpr ReasonSpec kReasons[] = {
     {Reason::kEmergencyStop, "emergency_stop", "emergency switch is pressed"},
     {Reason::kBusy, "busy", "servo and LED wait while a stepper runs (legacy mode)"},
     {Reason::kRateLimit, "rate_limit", "step rate beyond what the board can time"},
+    {Reason::kSoftLimit, "soft_limit", "move would leave the soft travel limits"},
 };
 inline constexpr uint32_t kReasonCount = sizeof(kReasons) / sizeof(kReasons[0]);
 
@@ -93,12 +99,6 @@ constexpr bool reasons_indexed_by_code() {
   return true;
 }
 static_assert(reasons_indexed_by_code(), "kReasons[i] must describe reason code i");
-
-// ---------------------------------------------------------------------------------------
-// Replies (protocol v2; reply_writer.h): one per non-blank line received.
-
-inline constexpr const char* kReplyAccepted = "ACK";  // no values
-inline constexpr const char* kReplyRefused = "NAK";   // reason, token (255: none), offset
 
 // ---------------------------------------------------------------------------------------
 // Board facts the grammar depends on
@@ -118,12 +118,24 @@ inline constexpr uint32_t kActionHome = 3;
 // ---------------------------------------------------------------------------------------
 // Commands and their fields
 
-enum class CommandId : uint8_t { kStepper, kServo, kLed };
+enum class CommandId : uint8_t {
+  kStepper,
+  kServo,
+  kLed,
+  // Protocol v2 (docs/protocol.md "Protocol v2").
+  kVersion,       // VER: version and capabilities query
+  kStatus,        // STA: status query of one unit
+  kSet,           // SET: change a motor setting
+  kGet,           // GET: read a motor setting
+  kLimits,        // LIM: soft travel limits
+  kChecksumMode,  // CRC: the seed's sum or CRC-16
+};
 
 enum FieldFlag : uint8_t {
   kPowerOfTwo = 1u << 0,        // the value must be a power of two (0 is not one)
   kUncheckedOnStop = 1u << 1,   // not checked at all when the action is stop
   kZeroAllowedOnHome = 1u << 2, // 0 is also accepted when the action is home
+  kSettingValue = 1u << 3,      // range given by the setting the previous field names
 };
 
 struct FieldSpec {
@@ -167,10 +179,74 @@ inline constexpr FieldSpec kLedFields[] = {
     {"w", 0, 255, 0, 0, 0, "white"},
 };
 
+// Motor settings (SET / GET), numbered from 1; defaults reproduce the seed.
+struct SettingSpec {
+  const char* name;
+  uint32_t min;
+  uint32_t max;
+  uint32_t initial;
+  const char* meaning;
+};
+inline constexpr SettingSpec kSettings[] = {
+    {"current_ma", 100, 4000, 1000, "full-scale coil current, mA"},
+    {"decay", 0, 5, 5, "DRV8711 decay mode (5 auto-mixed)"},
+    {"accel", 0, 2000000, 0, "steps/s^2; 0 constant rate"},
+    {"max_rate", 1, 50000, 50000, "fastest accepted move, steps/s"},
+    {"home_end", 0, 1, 0, "switch end homing seeks (0 toward reverse)"},
+    {"home_seek_us", 5, 1000000, 500, "delay per step seeking, when the frame's is 0"},
+    {"home_pull_off", 0, 100000, 0, "steps back off the switch after it closes"},
+    {"home_locate_us", 0, 1000000, 0, "delay per step re-approaching slowly (0: none)"},
+};
+inline constexpr uint32_t kSettingCount = sizeof(kSettings) / sizeof(kSettings[0]);
+enum SettingId : uint8_t {
+  kSettingCurrent = 1,
+  kSettingDecay,
+  kSettingAccel,
+  kSettingMaxRate,
+  kSettingHomeEnd,
+  kSettingHomeSeek,
+  kSettingHomePullOff,
+  kSettingHomeLocate,
+};
+static_assert(kSettingHomeLocate == kSettingCount, "one SettingId per kSettings entry");
+
+// STA's units.
+inline constexpr uint32_t kUnitBoard = 4;        // switches, emergency, servos
+inline constexpr uint32_t kUnitFirstStrip = 5;   // 5 and 6: LED strips 1 and 2
+
+inline constexpr FieldSpec kStatusFields[] = {
+    {"unit", 1, kUnitFirstStrip + kStripCount - 1, 0, 0, 0, "1-3 a motor, 4 the board, 5-6 LED strip 1-2"},
+};
+inline constexpr FieldSpec kSetFields[] = {
+    {"motor", 1, kMotorCount, 0, 0, 0, "stepper 1-3"},
+    {"setting", 1, kSettingCount, 0, 0, 0, "setting id (docs/protocol.md, Settings)"},
+    {"value", 0, kIntMax, kSettingValue, 0, 0, "new value, within the setting's range"},
+};
+inline constexpr FieldSpec kGetFields[] = {
+    {"motor", 1, kMotorCount, 0, 0, 0, "stepper 1-3"},
+    {"setting", 1, kSettingCount, 0, 0, 0, "setting id (docs/protocol.md, Settings)"},
+};
+inline constexpr FieldSpec kLimitFields[] = {
+    {"motor", 1, kMotorCount, 0, 0, 0, "stepper 1-3"},
+    {"low_sign", 0, 1, 0, 0, 0, "0 plus, 1 minus"},
+    {"low", 0, kIntMax, 0, 0, 0, "lowest position, 1/256 step"},
+    {"high_sign", 0, 1, 0, 0, 0, "0 plus, 1 minus"},
+    {"high", 0, kIntMax, 0, 0, 0, "highest position, 1/256 step (low < high enables)"},
+};
+inline constexpr FieldSpec kChecksumModeFields[] = {
+    {"mode", 0, 1, 0, 0, 0, "0 the seed's sum, 1 CRC-16"},
+};
+
 inline constexpr CommandSpec kCommands[] = {
     {"STM", CommandId::kStepper, 5, kStepperFields, 1, "stepper: move, run, stop or home"},
     {"SVM", CommandId::kServo, 2, kServoFields, -1, "servo: go to an angle"},
     {"LED", CommandId::kLed, 5, kLedFields, -1, "LED strip: set one colour"},
+    {"VER", CommandId::kVersion, 0, nullptr, -1, "query: version and capabilities"},
+    {"STA", CommandId::kStatus, 1, kStatusFields, -1, "query: status of a motor, the board or a strip"},
+    {"SET", CommandId::kSet, 3, kSetFields, -1, "change a motor setting"},
+    {"GET", CommandId::kGet, 2, kGetFields, -1, "query: a motor setting"},
+    {"LIM", CommandId::kLimits, 5, kLimitFields, -1, "soft travel limits of a motor"},
+    {"CRC", CommandId::kChecksumMode, 1, kChecksumModeFields, -1, "checksum mode: sum or CRC-16"},
 };
 inline constexpr uint32_t kCommandCount = sizeof(kCommands) / sizeof(kCommands[0]);
 
@@ -184,6 +260,134 @@ constexpr bool commands_indexed_by_id() {
   return true;
 }
 static_assert(commands_indexed_by_id(), "kCommands[i] must describe CommandId i");
+
+// ---------------------------------------------------------------------------------------
+// Board -> host frames (protocol v2, docs/protocol.md "Replies" and "Protocol v2"). One reply
+// per non-blank line received; events (names starting with 'E') come unprompted between them.
+
+inline constexpr uint32_t kProtocolVersion = 2;
+inline constexpr uint32_t kFirmwareVersion = 100;  // major·10000 + minor·100 + patch: 0.1.0
+
+enum class BoardFrameId : uint8_t {
+  kAck,
+  kNak,
+  kVersion,
+  kMotorStatus,
+  kBoardStatus,
+  kStripStatus,
+  kSettingValue,
+  kBooted,
+  kMotionEnded,
+  kHomingEnded,
+  kLimitChanged,
+  kEmergencyChanged,
+  kDriverFault,
+};
+
+struct BoardFrameSpec {
+  const char* name;
+  BoardFrameId id;
+  uint8_t value_count;
+  const FieldSpec* fields;
+  const char* summary;
+};
+
+// How a motion ended (EVD).
+inline constexpr uint32_t kEndCompleted = 1;
+inline constexpr uint32_t kEndStopped = 2;
+inline constexpr uint32_t kEndLimit = 3;
+inline constexpr uint32_t kEndEmergency = 4;
+inline constexpr uint32_t kEndDropped = 5;
+
+inline constexpr FieldSpec kNakFields[] = {
+    {"reason", 1, 255, 0, 0, 0, "reason code"},
+    {"token", 0, 255, 0, 0, 0, "token index (255: none)"},
+    {"offset", 0, kLineMax, 0, 0, 0, "byte offset in the line"},
+};
+inline constexpr FieldSpec kVersionFields[] = {
+    {"protocol", 1, 255, 0, 0, 0, "protocol version"},
+    {"firmware", 0, kIntMax, 0, 0, 0, "major*10000 + minor*100 + patch"},
+    {"legacy", 0, 1, 0, 0, 0, "1: seed rule [5] in force"},
+    {"line_max", 1, 65535, 0, 0, 0, "longest line the board reads"},
+    {"max_rate", 1, kIntMax, 0, 0, 0, "step-rate budget, steps/s"},
+    {"board", 0, 999, 0, 0, 0, "motors*100 + servos*10 + strips"},
+    {"switch_mask", 0, 7, 0, 0, 0, "bit m-1: motor m has limit switches"},
+    {"checksum_mode", 0, 1, 0, 0, 0, "0 sum, 1 CRC-16"},
+};
+inline constexpr FieldSpec kMotorStatusFields[] = {
+    {"motor", 1, kMotorCount, 0, 0, 0, "stepper 1-3"},
+    {"state", 0, 4, 0, 0, 0, "0 idle, 1 moving, 2 homing, 3 changing, 4 self-test"},
+    {"pos_sign", 0, 1, 0, 0, 0, "0 plus, 1 minus"},
+    {"pos", 0, kIntMax, 0, 0, 0, "position, 1/256 step"},
+    {"target_sign", 0, 1, 0, 0, 0, "0 plus, 1 minus"},
+    {"target", 0, kIntMax, 0, 0, 0, "where the move ends, 1/256 step"},
+    {"rate", 0, kIntMax, 0, 0, 0, "steps/s now"},
+    {"flags", 0, 255, 0, 0, 0, "bit 0 homed, 1 switch end 0, 2 end 1, 3 runs until stopped, 4-7 log2 microstep"},
+};
+inline constexpr FieldSpec kBoardStatusFields[] = {
+    {"emergency", 0, 1, 0, 0, 0, "1: emergency switch pressed"},
+    {"limits", 0, 15, 0, 0, 0, "bit 2(m-1)+end: that limit switch is pressed"},
+    {"servo1_us", 0, 2400, 0, 0, 0, "servo 1 pulse, 0 released"},
+    {"servo2_us", 0, 2400, 0, 0, 0, "servo 2 pulse, 0 released"},
+};
+inline constexpr FieldSpec kMotionEndedFields[] = {
+    {"motor", 1, kMotorCount, 0, 0, 0, "stepper 1-3"},
+    {"how", kEndCompleted, kEndDropped, 0, 0, 0, "1 completed, 2 stopped, 3 limit switch, 4 emergency, 5 dropped"},
+    {"pos_sign", 0, 1, 0, 0, 0, "0 plus, 1 minus"},
+    {"pos", 0, kIntMax, 0, 0, 0, "position, 1/256 step"},
+};
+inline constexpr FieldSpec kHomingEndedFields[] = {
+    {"motor", 1, kMotorCount, 0, 0, 0, "stepper 1-3"},
+    {"homed", 0, 1, 0, 0, 0, "1 homed (position 0), 0 switch not found"},
+    {"pos_sign", 0, 1, 0, 0, 0, "0 plus, 1 minus"},
+    {"pos", 0, kIntMax, 0, 0, 0, "position, 1/256 step"},
+};
+inline constexpr FieldSpec kBootedFields[] = {
+    {"protocol", 1, 255, 0, 0, 0, "protocol version"},
+    {"firmware", 0, kIntMax, 0, 0, 0, "major*10000 + minor*100 + patch"},
+};
+inline constexpr FieldSpec kLimitChangedFields[] = {
+    {"motor", 1, kMotorCount, 0, 0, 0, "motor with switches"},
+    {"end", 0, 1, 0, 0, 0, "0 toward reverse, 1 toward forward"},
+    {"pressed", 0, 1, 0, 0, 0, "1 pressed, 0 released"},
+};
+inline constexpr FieldSpec kEmergencyChangedFields[] = {
+    {"pressed", 0, 1, 0, 0, 0, "1 pressed, 0 released"},
+};
+inline constexpr FieldSpec kDriverFaultFields[] = {
+    {"motor", 1, kMotorCount, 0, 0, 0, "stepper 1-3"},
+    {"status", 0, 255, 0, 0, 0, "DRV8711 STATUS bits"},
+};
+
+inline constexpr BoardFrameSpec kBoardFrames[] = {
+    {"ACK", BoardFrameId::kAck, 0, nullptr, "reply: the line was accepted"},
+    {"NAK", BoardFrameId::kNak, 3, kNakFields, "reply: the line was refused"},
+    {"VER", BoardFrameId::kVersion, 8, kVersionFields, "reply to VER"},
+    {"STA", BoardFrameId::kMotorStatus, 8, kMotorStatusFields, "reply to STA 1-3"},
+    {"STB", BoardFrameId::kBoardStatus, 4, kBoardStatusFields, "reply to STA 4"},
+    {"STL", BoardFrameId::kStripStatus, 5, kLedFields, "reply to STA 5-6"},
+    {"SET", BoardFrameId::kSettingValue, 3, kSetFields, "reply to GET"},
+    {"EVB", BoardFrameId::kBooted, 2, kBootedFields, "event: the board booted"},
+    {"EVD", BoardFrameId::kMotionEnded, 4, kMotionEndedFields, "event: a motion ended"},
+    {"EVH", BoardFrameId::kHomingEnded, 4, kHomingEndedFields, "event: homing ended"},
+    {"EVL", BoardFrameId::kLimitChanged, 3, kLimitChangedFields, "event: a limit switch changed"},
+    {"EVE", BoardFrameId::kEmergencyChanged, 1, kEmergencyChangedFields, "event: the emergency switch changed"},
+    {"EVF", BoardFrameId::kDriverFault, 2, kDriverFaultFields, "event: a driver fault"},
+};
+inline constexpr uint32_t kBoardFrameCount = sizeof(kBoardFrames) / sizeof(kBoardFrames[0]);
+
+constexpr const BoardFrameSpec& board_frame_spec(BoardFrameId id) {
+  return kBoardFrames[static_cast<uint8_t>(id)];
+}
+constexpr bool board_frames_indexed_by_id() {
+  for (uint32_t i = 0; i < kBoardFrameCount; ++i) {
+    if (static_cast<uint32_t>(kBoardFrames[i].id) != i) return false;
+  }
+  return true;
+}
+static_assert(board_frames_indexed_by_id(), "kBoardFrames[i] must describe BoardFrameId i");
+// Events are told from replies by the first letter of the name.
+constexpr bool is_event(const BoardFrameSpec& frame) { return frame.name[0] == 'E'; }
 
 constexpr bool is_power_of_two(uint32_t v) { return v != 0 && (v & (v - 1)) == 0; }
 

@@ -212,6 +212,31 @@ uint32_t StepScheduler::steps_done(uint8_t motor) const {
   return is_motor(motor) ? load(motors_[motor - 1].fired) : 0;
 }
 
+bool StepScheduler::target(uint8_t motor, int32_t& out) const {
+  if (!is_motor(motor)) return false;
+  const Motor& mo = motors_[motor - 1];
+  // The interrupt may change the move between the reads; gen tells, and the read is retried.
+  for (int attempt = 0; attempt < kAttempts; ++attempt) {
+    const uint32_t gen = load(mo.gen);
+    fence();
+    const uint8_t active = load(mo.active);
+    const int32_t position = load(mo.position);
+    const uint32_t fired = load(mo.fired);
+    fence();
+    if (load(mo.gen) != gen) continue;
+    if (active == kNoSlot) {
+      out = position;
+      return true;
+    }
+    const Profile& profile = mo.slots[active];
+    if (profile.endless) return false;
+    const uint32_t left = profile.total_steps > fired ? profile.total_steps - fired : 0;
+    out = static_cast<int32_t>(position + static_cast<int64_t>(left) * profile.position_step);
+    return true;
+  }
+  return false;
+}
+
 uint32_t StepScheduler::interval(uint8_t motor) const {
   return is_motor(motor) ? load(motors_[motor - 1].interval) : 0;
 }

@@ -108,6 +108,8 @@ class StepScheduler {
   bool is_running(uint8_t motor) const;
   int32_t position(uint8_t motor) const;      // 1/256 step
   uint32_t steps_done(uint8_t motor) const;   // steps of the current (or last) move
+  // Where the playing profile ends (the position at rest); false while it runs until stopped.
+  bool target(uint8_t motor, int32_t& out) const;
   uint32_t interval(uint8_t motor) const;     // ticks between its last two rising edges; 0 at rest
   uint32_t rate(uint8_t motor) const;         // steps/s from interval(); 0 at rest
   uint32_t finished(uint8_t motor) const;     // motions ended so far (poll for a change)

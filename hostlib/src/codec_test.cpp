@@ -157,3 +157,126 @@ TEST_CASE("command_from_words builds and checks a command") {
   CHECK(few.error().message.find("SVM <servo> <angle>") != std::string::npos);
   CHECK(hmc::command_from_words({"LED", "1", "2", "3", "4", "x"}).error().field == "w");
 }
+
+TEST_CASE("protocol v2 commands encode, decode and describe") {
+  CHECK(*hmc::encode(hmc::VersionQuery{}) == "STX#1#VER#0#ETX");
+  auto ver = decode("STX#1#VER#0#ETX");
+  REQUIRE(ver.ok());
+  CHECK(std::holds_alternative<hmc::VersionQuery>(ver->command));
+  CHECK(hmc::describe(ver->command) == "ask for the version and capabilities");
+
+  auto set = hmc::command_from_words({"SET", "1", "3", "8000"});
+  REQUIRE(set.ok());
+  CHECK(std::get<hmc::SetSetting>(*set) == hmc::SetSetting{1, 3, 8000});
+  CHECK(*hmc::encode(*set) == "STX#4#SET#1#3#8000#68#ETX");
+  CHECK(hmc::describe(*set) == "stepper 1: set accel (steps/s^2; 0 constant rate) to 8000");
+
+  CHECK(*hmc::encode(hmc::StatusQuery{4}) == "STX#2#STA#4#4#ETX");
+  CHECK(hmc::describe(hmc::StatusQuery{5}) == "ask for the status of LED strip 1");
+  CHECK(*hmc::encode(hmc::GetSetting{2, 8}) == "STX#3#GET#2#8#10#ETX");
+  CHECK(*hmc::encode(hmc::SoftLimits{1, 1, 1600, 0, 409600}) == "STX#6#LIM#1#1#1600#0#409600#" +
+                                                                    std::to_string((1 + 1 + 1600 + 409600) % 256) +
+                                                                    "#ETX");
+  CHECK(hmc::describe(hmc::SoftLimits{1, 1, 1600, 0, 409600}) == "stepper 1: soft limits -1600 to 409600 (1/256 step)");
+  CHECK(hmc::describe(hmc::SoftLimits{1, 0, 0, 0, 0}) == "stepper 1: no soft limits");
+  CHECK(*hmc::encode(hmc::ChecksumModeCommand{1}) == "STX#2#CRC#1#1#ETX");
+  CHECK(hmc::parse_input("[#VER]").ok());
+  CHECK(std::get<hmc::GetSetting>(*hmc::parse_input(" [#GET#3#1] ")) == hmc::GetSetting{3, 1});
+}
+
+TEST_CASE("a setting's value is ranged by the setting it names") {
+  // current_ma is 100-4000; accel 0-2000000.
+  CHECK(decode("STX#4#SET#1#1#4000#162#ETX").ok());
+  const auto high = refusal("STX#4#SET#1#1#4001#163#ETX");
+  CHECK(high.reason == Reason::kOutOfRange);
+  CHECK(high.token == 5);
+  CHECK(high.offset == 14);
+  CHECK(high.found == 4001);
+  CHECK(high.field == "value");
+  CHECK(high.message == "value is 4001: expected 100-4000 for setting 1 (current_ma)");
+  CHECK(decode("STX#4#SET#1#3#0#4#ETX").ok());
+  // The setting is checked before the value it ranges.
+  const auto setting = refusal("STX#4#SET#1#10#0#11#ETX");
+  CHECK(setting.token == 4);
+  CHECK(setting.field == "setting");
+  auto words = hmc::command_from_words({"set", "2", "4", "0"});
+  REQUIRE_FALSE(words.ok());
+  CHECK(words.error().message == "value is 0: expected 1-50000 for setting 4 (max_rate)");
+}
+
+TEST_CASE("lint warns about soft limits that switch themselves off") {
+  CHECK(hmc::lint(hmc::SoftLimits{1, 0, 0, 0, 0}).empty());
+  CHECK(hmc::lint(hmc::SoftLimits{1, 1, 5, 0, 5}).empty());
+  const auto w = hmc::lint(hmc::SoftLimits{1, 0, 10, 1, 10});
+  REQUIRE(w.size() == 1);
+  CHECK(w[0].message.find("low 10 is not below high -10") != std::string::npos);
+}
+
+TEST_CASE("CRC-16 mode: the checksum field is the CRC of the bytes before it") {
+  using hmc::proto::ChecksumMode;
+  const auto crc = ChecksumMode::kCrc16;
+  CHECK(*hmc::encode(hmc::StepperMove{1, 1, 128, 1000, 500}, crc) == "STX#6#STM#1#1#128#1000#500#20499#ETX");
+  CHECK(*hmc::encode(hmc::VersionQuery{}, crc) == "STX#1#VER#04369#ETX");  // always 5 digits
+  CHECK(hmc::checksum(hmc::SetSetting{1, 3, 8000}, crc) == 26126);
+  CHECK(hmc::checksum(hmc::SetSetting{1, 3, 8000}) == 68);
+
+  auto ok = decode("STX#6#STM#1#1#128#1000#500#20499#ETX", crc);
+  REQUIRE(ok.ok());
+  CHECK(ok->canonical);
+  // Blanks around the frame are outside the CRC; leading zeros are inside it.
+  CHECK(decode("  STX#6#STM#1#1#128#1000#500#20499#ETX ", crc).ok());
+  CHECK(decode("STX#6#STM#1#1#128#1000#0500#20499#ETX", crc).error().reason == Reason::kChecksumMismatch);
+
+  // The seed's sum in CRC mode, and a CRC in sum mode, are named as such.
+  auto sum = decode("STX#6#STM#1#1#128#1000#500#00094#ETX", crc);
+  REQUIRE_FALSE(sum.ok());
+  CHECK(sum.error().reason == Reason::kChecksumMismatch);
+  CHECK(sum.error().expected == 20499);
+  CHECK(sum.error().found == 94);
+  CHECK(sum.error().message.find("this is the seed's sum") != std::string::npos);
+  auto short_sum = decode("STX#6#STM#1#1#128#1000#500#94#ETX", crc);
+  REQUIRE_FALSE(short_sum.ok());
+  CHECK(short_sum.error().reason == Reason::kBadNumber);
+  CHECK(short_sum.error().message.find("this is the seed's sum") != std::string::npos);
+  auto crc_in_sum = refusal("STX#6#STM#1#1#128#1000#500#20499#ETX");
+  CHECK(crc_in_sum.reason == Reason::kOutOfRange);
+  CHECK(crc_in_sum.message.find("this is the frame's CRC-16") != std::string::npos);
+
+  auto big = decode("STX#1#VER#65536#ETX", crc);
+  REQUIRE_FALSE(big.ok());
+  CHECK(big.error().reason == Reason::kOutOfRange);
+  CHECK(big.error().found == 65536);
+  CHECK(big.error().offset == 10);
+  CHECK(hmc::parse_input("STX#1#VER#04369#ETX", crc).ok());
+  CHECK_FALSE(hmc::parse_input("STX#1#VER#04369#ETX").ok());
+}
+
+TEST_CASE("CRC-16 mode: the checksum field is exactly 5 digits, zero-padded") {
+  using hmc::proto::ChecksumMode;
+  const auto crc = ChecksumMode::kCrc16;
+  auto padded = decode("STX#1#VER#04369#ETX", crc);
+  REQUIRE(padded.ok());
+  CHECK(padded->canonical);  // the padding is the canonical form
+  for (const char* line : {"STX#1#VER#4369#ETX", "STX#1#VER#004369#ETX"}) {
+    INFO(line);
+    auto d = decode(line, crc);
+    REQUIRE_FALSE(d.ok());
+    CHECK(d.error().reason == Reason::kBadNumber);
+    CHECK(d.error().token == 3);
+    CHECK(d.error().offset == 10);
+    CHECK(d.error().field == "checksum");
+    CHECK(d.error().message.find("in CRC-16 mode the checksum is exactly 5 digits") != std::string::npos);
+    CHECK(d.error().message.find("'04369'") != std::string::npos);
+  }
+  // A digit moved across the '#' into the checksum field (the corruption soak's find).
+  CHECK(decode("STX#6#STM#1#1#128#1000#50#020499#ETX", crc).error().reason == Reason::kBadNumber);
+  // The seed's sum keeps any width.
+  CHECK(decode("STX#1#VER#00#ETX").ok());
+}
+
+TEST_CASE("unknown names list the commands and point at the other direction") {
+  const auto d = refusal("STX#1#ACK#0#ETX");
+  CHECK(d.reason == Reason::kUnknownCommand);
+  CHECK(d.message.find("STM, SVM, LED, VER, STA, SET, GET, LIM and CRC") != std::string::npos);
+  CHECK(d.message.find("ACK is one of the board frames") != std::string::npos);
+}

@@ -1,19 +1,85 @@
 // Table-driven access to typed commands, and their description in words.
+//
+// Each command type lists its members in wire order once (Layout below); values, construction
+// and the checks that the variant matches protocol_facts.h's command table all derive from it.
 #include "hmc/command.h"
 
+#include <cstddef>
 #include <string>
 #include <type_traits>
+#include <utility>
 
 namespace hmc {
+namespace {
 
-// The variant's alternatives follow CommandId, so an index is an id.
-static_assert(std::is_same_v<std::variant_alternative_t<0, Command>, StepperMove> &&
-                  static_cast<int>(proto::CommandId::kStepper) == 0 &&
-                  std::is_same_v<std::variant_alternative_t<1, Command>, ServoMove> &&
-                  static_cast<int>(proto::CommandId::kServo) == 1 &&
-                  std::is_same_v<std::variant_alternative_t<2, Command>, LedColor> &&
-                  static_cast<int>(proto::CommandId::kLed) == 2,
-              "Command's alternatives are ordered by CommandId");
+template <typename T>
+struct Layout;
+template <>
+struct Layout<StepperMove> {
+  static constexpr std::array kFields{&StepperMove::motor, &StepperMove::dir, &StepperMove::microstep,
+                                      &StepperMove::steps, &StepperMove::delay_us};
+};
+template <>
+struct Layout<ServoMove> {
+  static constexpr std::array kFields{&ServoMove::servo, &ServoMove::angle};
+};
+template <>
+struct Layout<LedColor> {
+  static constexpr std::array kFields{&LedColor::strip, &LedColor::r, &LedColor::g, &LedColor::b, &LedColor::w};
+};
+template <>
+struct Layout<VersionQuery> {
+  static constexpr std::array<uint32_t VersionQuery::*, 0> kFields{};
+};
+template <>
+struct Layout<StatusQuery> {
+  static constexpr std::array kFields{&StatusQuery::unit};
+};
+template <>
+struct Layout<SetSetting> {
+  static constexpr std::array kFields{&SetSetting::motor, &SetSetting::setting, &SetSetting::value};
+};
+template <>
+struct Layout<GetSetting> {
+  static constexpr std::array kFields{&GetSetting::motor, &GetSetting::setting};
+};
+template <>
+struct Layout<SoftLimits> {
+  static constexpr std::array kFields{&SoftLimits::motor, &SoftLimits::low_sign, &SoftLimits::low,
+                                      &SoftLimits::high_sign, &SoftLimits::high};
+};
+template <>
+struct Layout<ChecksumModeCommand> {
+  static constexpr std::array kFields{&ChecksumModeCommand::mode};
+};
+
+// Alternative I of Command is CommandId I and has that command's number of values.
+template <std::size_t... I>
+constexpr bool variant_follows_table(std::index_sequence<I...>) {
+  return ((proto::kCommands[I].id == static_cast<proto::CommandId>(I) &&
+           Layout<std::variant_alternative_t<I, Command>>::kFields.size() == proto::kCommands[I].value_count) &&
+          ...);
+}
+static_assert(std::variant_size_v<Command> == proto::kCommandCount, "one Command alternative per command");
+static_assert(variant_follows_table(std::make_index_sequence<std::variant_size_v<Command>>{}),
+              "Command's alternatives are ordered by CommandId and hold the table's values");
+
+template <typename T>
+T from_values(const uint32_t* values) {
+  T out{};
+  std::size_t i = 0;
+  for (auto member : Layout<T>::kFields) out.*member = values[i++];
+  return out;
+}
+
+template <std::size_t... I>
+Command make_alternative(std::size_t index, const uint32_t* values, std::index_sequence<I...>) {
+  Command out;
+  ((index == I ? (void)(out = from_values<std::variant_alternative_t<I, Command>>(values)) : void()), ...);
+  return out;
+}
+
+}  // namespace
 
 proto::CommandId command_id(const Command& command) {
   return static_cast<proto::CommandId>(command.index());
@@ -24,27 +90,18 @@ const proto::CommandSpec& command_spec(const Command& command) {
 }
 
 CommandValues command_values(const Command& command) {
-  CommandValues out;
-  auto put = [&out](std::initializer_list<uint32_t> values) {
-    for (uint32_t v : values) out.values[out.count++] = v;
-  };
-  if (auto* s = std::get_if<StepperMove>(&command)) {
-    put({s->motor, s->dir, s->microstep, s->steps, s->delay_us});
-  } else if (auto* v = std::get_if<ServoMove>(&command)) {
-    put({v->servo, v->angle});
-  } else if (auto* l = std::get_if<LedColor>(&command)) {
-    put({l->strip, l->r, l->g, l->b, l->w});
-  }
-  return out;
+  return std::visit(
+      [](const auto& typed) {
+        CommandValues out;
+        for (auto member : Layout<std::decay_t<decltype(typed)>>::kFields) out.values[out.count++] = typed.*member;
+        return out;
+      },
+      command);
 }
 
-Command make_command(proto::CommandId id, const uint32_t* v) {
-  switch (id) {
-    case proto::CommandId::kStepper: return StepperMove{v[0], v[1], v[2], v[3], v[4]};
-    case proto::CommandId::kServo: return ServoMove{v[0], v[1]};
-    case proto::CommandId::kLed: break;
-  }
-  return LedColor{v[0], v[1], v[2], v[3], v[4]};
+Command make_command(proto::CommandId id, const uint32_t* values) {
+  return make_alternative(static_cast<std::size_t>(id), values,
+                          std::make_index_sequence<std::variant_size_v<Command>>{});
 }
 
 const proto::CommandSpec* find_command(std::string_view name) {
@@ -53,6 +110,8 @@ const proto::CommandSpec* find_command(std::string_view name) {
   }
   return nullptr;
 }
+
+std::string position_text(int64_t position) { return std::to_string(position); }
 
 namespace {
 
@@ -79,17 +138,55 @@ std::string describe_stepper(const StepperMove& s) {
   return out;
 }
 
+std::string unit_text(uint32_t unit) {
+  if (unit >= 1 && unit <= proto::kMotorCount) return "stepper " + std::to_string(unit);
+  if (unit == proto::kUnitBoard) return "the board (switches and servos)";
+  if (unit >= proto::kUnitFirstStrip && unit < proto::kUnitFirstStrip + proto::kStripCount) {
+    return "LED strip " + std::to_string(unit - proto::kUnitFirstStrip + 1);
+  }
+  return "unit " + std::to_string(unit);
+}
+
+// "accel (steps/s^2; 0 constant rate)", or "setting 12" for an id outside the table.
+std::string setting_text(uint32_t setting) {
+  if (setting < 1 || setting > proto::kSettingCount) return "setting " + std::to_string(setting);
+  const proto::SettingSpec& s = proto::kSettings[setting - 1];
+  return std::string(s.name) + " (" + s.meaning + ")";
+}
+
+struct Describer {
+  std::string operator()(const StepperMove& s) const { return describe_stepper(s); }
+  std::string operator()(const ServoMove& v) const {
+    return "servo " + std::to_string(v.servo) + (v.servo == 1 ? " (pan)" : " (tilt)") + " to " +
+           std::to_string(v.angle) + " degrees";
+  }
+  std::string operator()(const LedColor& l) const {
+    return "LED strip " + std::to_string(l.strip) + " to R" + std::to_string(l.r) + " G" + std::to_string(l.g) +
+           " B" + std::to_string(l.b) + " W" + std::to_string(l.w);
+  }
+  std::string operator()(const VersionQuery&) const { return "ask for the version and capabilities"; }
+  std::string operator()(const StatusQuery& q) const { return "ask for the status of " + unit_text(q.unit); }
+  std::string operator()(const SetSetting& s) const {
+    return "stepper " + std::to_string(s.motor) + ": set " + setting_text(s.setting) + " to " +
+           std::to_string(s.value);
+  }
+  std::string operator()(const GetSetting& g) const {
+    return "stepper " + std::to_string(g.motor) + ": ask for " + setting_text(g.setting);
+  }
+  std::string operator()(const SoftLimits& l) const {
+    std::string who = "stepper " + std::to_string(l.motor);
+    if (l.low_position() >= l.high_position()) return who + ": no soft limits";
+    return who + ": soft limits " + position_text(l.low_position()) + " to " + position_text(l.high_position()) +
+           " (1/256 step)";
+  }
+  std::string operator()(const ChecksumModeCommand& c) const {
+    return c.mode == static_cast<uint32_t>(proto::ChecksumMode::kCrc16) ? "checksums from now on: CRC-16"
+                                                                         : "checksums from now on: the seed's sum";
+  }
+};
+
 }  // namespace
 
-std::string describe(const Command& command) {
-  if (auto* s = std::get_if<StepperMove>(&command)) return describe_stepper(*s);
-  if (auto* v = std::get_if<ServoMove>(&command)) {
-    return std::string("servo ") + std::to_string(v->servo) + (v->servo == 1 ? " (pan)" : " (tilt)") +
-           " to " + std::to_string(v->angle) + " degrees";
-  }
-  const auto& l = std::get<LedColor>(command);
-  return "LED strip " + std::to_string(l.strip) + " to R" + std::to_string(l.r) + " G" + std::to_string(l.g) +
-         " B" + std::to_string(l.b) + " W" + std::to_string(l.w);
-}
+std::string describe(const Command& command) { return std::visit(Describer{}, command); }
 
 }  // namespace hmc

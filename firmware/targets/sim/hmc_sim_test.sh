@@ -47,6 +47,8 @@ frame() {
 }
 
 ack='STX#1#ACK#0#ETX'
+# replies: the board's output without its events (names starting with E, docs/protocol.md).
+replies() { grep -v '^STX#[0-9]*#E' || true; }
 # nak REASON TOKEN OFFSET
 nak() { frame NAK "$@"; }
 
@@ -91,15 +93,17 @@ stopped() {
 vector() { "$session" "$src/conformance/vectors" "$1" "$2"; }
 out=$(timeout 20 "$sim" --fast --no-self-test <"$src/examples/spec-frames.txt")
 check "stdio exit code" 0 $?
+check_match "stdio boot event" '^STX#3#EVB#2#100#102#ETX$' "$out"
+out=$(replies <<<"$out")
 check "stdio spec-frames answers (vector spec-session)" "$(vector spec-session replies)" "$out"
-out=$(timeout 20 "$sim" --fast --no-self-test --legacy <"$src/examples/spec-frames.txt")
+out=$(timeout 20 "$sim" --fast --no-self-test --legacy <"$src/examples/spec-frames.txt" | replies)
 check "stdio legacy answers (vector spec-session-legacy)" "$(vector spec-session-legacy replies)" "$out"
 
 out=$(timeout 20 "$sim" --fast --no-self-test --seed <"$src/examples/spec-frames.txt")
 check "stdio seed is silent" "" "$out"
 
 # Real time, with the self-test: the answer comes after the boot's half turn and back.
-out=$(printf '%s\n' "$(frame SVM 1 10)" | timeout 20 "$sim")
+out=$(printf '%s\n' "$(frame SVM 1 10)" | timeout 20 "$sim" | replies)
 check "stdio real time" "$ack" "$out"
 
 # ---------------------------------------------------------------------------------------
@@ -107,7 +111,7 @@ check "stdio real time" "$ack" "$out"
 start spec --tcp 127.0.0.1:0 --no-self-test
 if port=$(tcp_port spec); then
   # A plain network session with the spec's frames, in real time at 115 200 baud.
-  out=$(vector spec-session input | timeout 10 nc -q1 127.0.0.1 "$port")
+  out=$(vector spec-session input | timeout 10 nc -q1 127.0.0.1 "$port" | replies)
   check "tcp spec-frames answers (vector spec-session)" "$(vector spec-session replies)" "$out"
 fi
 stopped spec TERM
@@ -115,13 +119,13 @@ stopped spec TERM
 start tcp --tcp 127.0.0.1:0 --no-self-test
 if port=$(tcp_port tcp); then
   out=$(printf '%s\n' "$(frame SVM 1 10)" 'STX#6#STM#3#1#1#11#1000#238#ETX' "$(frame STM 3 1 16 0 500)" |
-    timeout 10 nc -q1 127.0.0.1 "$port")
+    timeout 10 nc -q1 127.0.0.1 "$port" | replies)
   check "tcp first client" "$(printf '%s\n%s\n%s' "$ack" "$(nak 8 8 24)" "$ack")" "$out"
   # Motor 3 still runs: homing is refused, motors_running (12), token 4 (dir), byte 12.
-  out=$(printf '%s\n' "$(frame STM 1 3 0 0 0)" | timeout 10 nc -q1 127.0.0.1 "$port")
+  out=$(printf '%s\n' "$(frame STM 1 3 0 0 0)" | timeout 10 nc -q1 127.0.0.1 "$port" | replies)
   check "tcp second client" "$(nak 12 4 12)" "$out"
   # A client that closes its sending side gets its answers, then the connection closes.
-  out=$(printf '%s\n' "$(frame STM 3 0 0 0 0)" | timeout 10 nc -N 127.0.0.1 "$port")
+  out=$(printf '%s\n' "$(frame STM 3 0 0 0 0)" | timeout 10 nc -N 127.0.0.1 "$port" | replies)
   check "tcp half-closed client" "$ack" "$out"
 fi
 stopped tcp TERM
@@ -136,7 +140,7 @@ if dev=$(announced pty 's/^hmc-sim: pty \(\/dev\/.*\)$/\1/p'); then
     exec 3<>"$dev"
     printf '%s\n' "$(frame LED 2 0 0 "$round" 0)" >&3
     line=
-    IFS= read -r -t 10 line <&3
+    while IFS= read -r -t 10 line <&3 && [[ $line =~ ^STX#[0-9]+#E ]]; do :; done  # skip events
     exec 3>&-
     check "pty round $round" "$ack" "$line"
   done
@@ -153,14 +157,14 @@ error: unknown command .bogus.*
 error: motor .3.: only motors 1 and 2 have limit switches$' "$out"
   toward_switch=$(frame STM 1 1 16 100 500)
   # limit_pressed (11), token 4 (dir), byte 12.
-  out=$(printf '%s\n' "$toward_switch" | timeout 10 nc -q1 127.0.0.1 "$port")
+  out=$(printf '%s\n' "$toward_switch" | timeout 10 nc -q1 127.0.0.1 "$port" | replies)
   check "control press refuses the move" "$(nak 11 4 12)" "$out"
   out=$(printf 'status\n' | timeout 10 nc -q1 127.0.0.1 "$cport")
   check_match "control status" \
     '^\{"t":[0-9]+,"emergency":false,"motors":\[\{"motor":1,"pos":204800,.*"switches":\[false,true\]' "$out"
   out=$(printf 'auto 1 1\n' | timeout 10 nc -q1 127.0.0.1 "$cport")
   check "control auto" "ok" "$out"
-  out=$(printf '%s\n' "$toward_switch" | timeout 10 nc -q1 127.0.0.1 "$port")
+  out=$(printf '%s\n' "$toward_switch" | timeout 10 nc -q1 127.0.0.1 "$port" | replies)
   check "control released switch allows the move" "$ack" "$out"
 fi
 stopped control TERM

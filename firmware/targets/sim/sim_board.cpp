@@ -243,6 +243,13 @@ void SimBoard::set_emergency(bool pressed) {
   main_loop();
 }
 
+void SimBoard::set_driver_fault(uint8_t motor, uint8_t status_bits) {
+  if (motor < 1 || motor > 3) return;
+  uint16_t& status = drv_[motor - 1][static_cast<uint8_t>(drv::Register::kStatus)];
+  status = static_cast<uint16_t>(status | status_bits);
+  trace_line("\"ev\":\"fault\",\"motor\":" + std::to_string(motor) + ",\"status\":" + std::to_string(status));
+}
+
 int32_t SimBoard::axis_position(uint8_t motor) const { return axes_[motor - 1].position; }
 uint32_t SimBoard::steps(uint8_t motor) const { return axes_[motor - 1].steps; }
 

@@ -94,6 +94,8 @@ class SimBoard {
   // Injected events (take effect now, as a switch interrupt would).
   void force_limit(uint8_t motor, uint8_t end, Force force);
   void set_emergency(bool pressed);
+  // Latches DRV8711 STATUS bits of a driver (a fault the firmware finds when it reads STATUS).
+  void set_driver_fault(uint8_t motor, uint8_t status_bits);
 
   // Observations.
   const fw::Controller& controller() const { return *controller_; }

@@ -42,6 +42,7 @@ TEST_CASE("received bytes arrive at the emulated baud rate") {
   config.baud = 115200;
   SimBoard board(config);
   board.boot();
+  CHECK(board.take_output() == "STX#3#EVB#2#100#102#ETX\n");  // the boot event
   const std::string frame = "STX#6#LED#1#200#120#100#20#185#ETX\n";
   board.send(frame);
   // 36 bytes at 10 bits each: 3.125 ms. Not answered before the last byte arrives.
@@ -61,7 +62,10 @@ TEST_CASE("an axis moves by 256/microstep per step and closes its switch at the 
   // end 0 closes and the motor halts.
   board.send("STX#6#STM#1#2#16#200#100#63#ETX\n");
   board.run_for(100 * kMs);
-  CHECK(board.take_output() == "STX#1#ACK#0#ETX\n");
+  // The reply, then the switch event and the end of the motion (halted by a limit switch, at
+  // -1600: the firmware counts from 0 at power-up).
+  CHECK(board.take_output() ==
+        "STX#3#EVB#2#100#102#ETX\nSTX#1#ACK#0#ETX\nSTX#4#EVL#1#0#1#2#ETX\nSTX#5#EVD#1#3#1#1600#69#ETX\n");
   CHECK(board.axis_position(1) == 0);
   CHECK(board.steps(1) == 100);
   CHECK(board.limit_pressed(1, 0));

@@ -116,13 +116,29 @@ Result<SimCommand> parse_command(std::string_view line) {
     }
     return Result<SimCommand>::ok(command);
   }
+  if (name == "fault") {
+    std::string_view words = argument;
+    const std::string_view motor = take_word(words);
+    const std::string_view bits = take_word(words);
+    uint64_t m = 0, b = 0;
+    if (!all_digits(motor) || !to_u64(motor, m) || m < 1 || m > 3) {
+      return Result<SimCommand>::fail("fault: motor " + quoted(motor) + " is not 1, 2 or 3");
+    }
+    if (!all_digits(bits) || !to_u64(bits, b) || b > 255 || !trim(words).empty()) {
+      return Result<SimCommand>::fail("fault: expected STATUS bits 0-255 after the motor, got " + quoted(argument));
+    }
+    command.action = Action::kFault;
+    command.motor = static_cast<uint8_t>(m);
+    command.end = static_cast<uint8_t>(b);
+    return Result<SimCommand>::ok(command);
+  }
   if (name == "status") {
     if (!argument.empty()) return Result<SimCommand>::fail("status takes no arguments");
     command.action = Action::kStatus;
     return Result<SimCommand>::ok(command);
   }
   return Result<SimCommand>::fail("unknown command " + quoted(name) +
-                                  " (expected press, release, auto, estop, send or status)");
+                                  " (expected press, release, auto, estop, fault, send or status)");
 }
 
 Result<Ticks> parse_time(std::string_view text) {
@@ -231,6 +247,9 @@ void apply_command(SimBoard& board, const SimCommand& command) {
       break;
     case Action::kEstopRelease:
       board.set_emergency(false);
+      break;
+    case Action::kFault:
+      board.set_driver_fault(command.motor, command.end);
       break;
     case Action::kSend:
       board.send(command.text + "\n");

@@ -4,6 +4,7 @@
 //
 //   press M END | release M END | auto M END    force limit switch END (0, 1) of motor M (1, 2)
 //   estop | estop release                        the emergency switch
+//   fault M BITS                                 latch DRV8711 STATUS bits (0-255) of motor M
 //   send TEXT                                    TEXT and a line feed, as if received on the link
 //   status                                       control channel only: one JSON line of state
 //
@@ -22,12 +23,12 @@
 
 namespace hmc::sim {
 
-enum class Action : uint8_t { kPress, kRelease, kAuto, kEstop, kEstopRelease, kSend, kStatus };
+enum class Action : uint8_t { kPress, kRelease, kAuto, kEstop, kEstopRelease, kFault, kSend, kStatus };
 
 struct SimCommand {
   Action action = Action::kStatus;
   uint8_t motor = 0;  // press, release, auto: 1 or 2
-  uint8_t end = 0;    // press, release, auto: 0 or 1
+  uint8_t end = 0;    // press, release, auto: 0 or 1; fault: the STATUS bits
   std::string text;   // send: the line, without its line feed
 
   bool operator==(const SimCommand& other) const {

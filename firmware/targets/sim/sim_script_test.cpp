@@ -57,10 +57,16 @@ TEST_CASE("estop, status and unknown words") {
   CHECK(parse_command(" estop  release ").value->action == Action::kEstopRelease);
   CHECK(error_of(parse_command("estop now")) == "estop takes nothing or 'release', got 'now'");
   CHECK(parse_command("status").value->action == Action::kStatus);
+  const Result<SimCommand> fault = parse_command("fault 2 6");
+  REQUIRE(fault);
+  CHECK(fault.value->action == Action::kFault);
+  CHECK((fault.value->motor == 2 && fault.value->end == 6));
+  CHECK(error_of(parse_command("fault 4 1")) == "fault: motor '4' is not 1, 2 or 3");
+  CHECK(error_of(parse_command("fault 1 256")) == "fault: expected STATUS bits 0-255 after the motor, got '1 256'");
   CHECK(error_of(parse_command("status 1")) == "status takes no arguments");
   CHECK(error_of(parse_command("")) == "no command");
   CHECK(error_of(parse_command("jump 1")) ==
-        "unknown command 'jump' (expected press, release, auto, estop, send or status)");
+        "unknown command 'jump' (expected press, release, auto, estop, fault, send or status)");
   CHECK(error_of(parse_command("Press 1 0")).rfind("unknown command 'Press'", 0) == 0);
 }
 
@@ -237,10 +243,11 @@ TEST_CASE("commands act on the board; status reports it") {
   apply_command(board, *parse_command("estop release").value);
   CHECK_FALSE(board.emergency_pressed());
 
+  board.take_output();  // the boot event and the switch events so far
   apply_command(board, *parse_command("press 1 0").value);
   apply_command(board, *parse_command("send STX#6#LED#1#200#120#100#20#185#ETX").value);
   board.run_for(hmc::hal::kTicksPerSecond / 10);
-  CHECK(board.take_output() == "STX#1#ACK#0#ETX\n");
+  CHECK(board.take_output() == "STX#4#EVL#1#0#1#2#ETX\nSTX#1#ACK#0#ETX\n");
 
   const std::string status = status_json(board);
   CHECK(status.rfind("{\"t\":", 0) == 0);

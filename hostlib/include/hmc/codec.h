@@ -5,6 +5,9 @@
 // naming what was wrong, where (byte offset and field) and what was expected. encode() writes
 // the canonical frame, length and checksum filled in. parse_input() accepts what people type:
 // a frame or the spec's command-set notation `[#STM#1#1#128#1000#500]`.
+//
+// Every function that reads or writes a checksum takes the checksum mode in force (protocol
+// v2's `CRC` command): the seed's sum, the default, or CRC-16 (docs/protocol.md "CRC-16 mode").
 #pragma once
 
 #include <cstddef>
@@ -13,6 +16,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/crc16.h"
 #include "hmc/command.h"
 #include "hmc/result.h"
 
@@ -48,7 +52,7 @@ bool is_blank(std::string_view line);
 
 // Judges one line. One trailing LF, CRLF or CR is allowed and removed. A blank line is refused
 // as bad_start ("no frame on the line"); stream readers skip blank lines before decoding.
-Result<Decoded, Diagnostic> decode(std::string_view line);
+Result<Decoded, Diagnostic> decode(std::string_view line, proto::ChecksumMode mode = proto::ChecksumMode::kSum);
 
 // Checks a command against the protocol's ranges and rules (steps 15-16 of the order of
 // checks). Token and offset in the diagnostic refer to the frame encode() would write.
@@ -58,16 +62,17 @@ Result<Command, Diagnostic> validate(const Command& command);
 std::vector<Warning> lint(const Command& command);
 
 // The canonical frame for a command, without a line terminator; refuses an invalid command.
-Result<std::string, Diagnostic> encode(const Command& command);
+Result<std::string, Diagnostic> encode(const Command& command, proto::ChecksumMode mode = proto::ChecksumMode::kSum);
 
 // A command as a person types it: a frame (`STX#...#ETX`) or command-set notation
-// (`[#NAME#v1#...#vn]`, blanks around allowed). Offsets refer to `text`.
-Result<Command, Diagnostic> parse_input(std::string_view text);
+// (`[#NAME#v1#...#vn]`, blanks around allowed; it has no checksum). Offsets refer to `text`.
+Result<Command, Diagnostic> parse_input(std::string_view text, proto::ChecksumMode mode = proto::ChecksumMode::kSum);
 
-// A command from a name and its values as separate words (`STM 1 1 128 1000 500`).
+// A command from a name and its values as separate words (`STM 1 1 128 1000 500`, `VER`).
 Result<Command, Diagnostic> command_from_words(const std::vector<std::string>& words);
 
-// The checksum of a command's values: their sum mod 256.
-uint32_t checksum(const Command& command);
+// The checksum field of the command's canonical frame: the sum of its values mod 256, or the
+// CRC-16 of the frame's bytes before the checksum field.
+uint32_t checksum(const Command& command, proto::ChecksumMode mode = proto::ChecksumMode::kSum);
 
 }  // namespace hmc

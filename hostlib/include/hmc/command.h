@@ -1,8 +1,10 @@
-// Typed commands of the wire protocol and table-driven access to their values.
+// Typed commands of the wire protocol (host -> board) and table-driven access to their values.
 //
-// A Command is one of StepperMove (STM), ServoMove (SVM) or LedColor (LED). Fields keep the
-// values exactly as received (a stop's unchecked fields included), so a decoded frame encodes
-// back to itself. The field order and names are protocol_facts.h's.
+// A Command is one of StepperMove (STM), ServoMove (SVM), LedColor (LED) or, protocol v2,
+// VersionQuery (VER), StatusQuery (STA), SetSetting (SET), GetSetting (GET), SoftLimits (LIM)
+// and ChecksumModeCommand (CRC). Fields keep the values exactly as received (a stop's unchecked
+// fields included), so a decoded frame encodes back to itself. The field order and names are
+// protocol_facts.h's; the variant's alternatives are ordered by proto::CommandId.
 #pragma once
 
 #include <array>
@@ -11,10 +13,10 @@
 #include <string_view>
 #include <variant>
 
+#include "core/crc16.h"
 #include "core/protocol_facts.h"
 
 namespace hmc {
-
 
 // STM: move, run, stop or home a stepper.
 struct StepperMove {
@@ -45,7 +47,57 @@ struct LedColor {
   }
 };
 
-using Command = std::variant<StepperMove, ServoMove, LedColor>;
+// VER: ask for the protocol and firmware versions and the board's capabilities. No values.
+struct VersionQuery {
+  bool operator==(const VersionQuery&) const { return true; }
+};
+
+// STA: ask for the status of one unit: 1-3 a motor, proto::kUnitBoard the board (switches,
+// servos), from proto::kUnitFirstStrip the LED strips.
+struct StatusQuery {
+  uint32_t unit = 1;
+  bool operator==(const StatusQuery& o) const { return unit == o.unit; }
+};
+
+// SET: change a motor setting (proto::kSettings[setting - 1] gives the value's range).
+struct SetSetting {
+  uint32_t motor = 1;
+  uint32_t setting = proto::kSettingCurrent;  // proto::SettingId
+  uint32_t value = 0;
+  bool operator==(const SetSetting& o) const {
+    return motor == o.motor && setting == o.setting && value == o.value;
+  }
+};
+
+// GET: ask for a motor setting's value (answered by a SET frame).
+struct GetSetting {
+  uint32_t motor = 1;
+  uint32_t setting = proto::kSettingCurrent;
+  bool operator==(const GetSetting& o) const { return motor == o.motor && setting == o.setting; }
+};
+
+// LIM: soft travel limits in 1/256 step, each a sign (0 plus, 1 minus) and a magnitude.
+// low < high enables them; all zero disables them.
+struct SoftLimits {
+  uint32_t motor = 1;
+  uint32_t low_sign = 0, low = 0;
+  uint32_t high_sign = 0, high = 0;
+  bool operator==(const SoftLimits& o) const {
+    return motor == o.motor && low_sign == o.low_sign && low == o.low && high_sign == o.high_sign &&
+           high == o.high;
+  }
+  int64_t low_position() const { return low_sign != 0 ? -int64_t{low} : int64_t{low}; }
+  int64_t high_position() const { return high_sign != 0 ? -int64_t{high} : int64_t{high}; }
+};
+
+// CRC: the checksum rule from the next line on (proto::ChecksumMode: 0 the seed's sum, 1 CRC-16).
+struct ChecksumModeCommand {
+  uint32_t mode = 0;
+  bool operator==(const ChecksumModeCommand& o) const { return mode == o.mode; }
+};
+
+using Command = std::variant<StepperMove, ServoMove, LedColor, VersionQuery, StatusQuery, SetSetting,
+                             GetSetting, SoftLimits, ChecksumModeCommand>;
 
 // A command's values in wire order; only the first `count` are meaningful.
 struct CommandValues {
@@ -56,7 +108,8 @@ struct CommandValues {
 proto::CommandId command_id(const Command& command);
 const proto::CommandSpec& command_spec(const Command& command);
 CommandValues command_values(const Command& command);
-// Builds a command from its values in wire order; `values` holds spec.value_count entries.
+// Builds a command from its values in wire order; `values` holds spec.value_count entries
+// (none for VER, so it may then be null).
 Command make_command(proto::CommandId id, const uint32_t* values);
 
 // The command table entry with this wire name, or nullptr.
@@ -64,5 +117,8 @@ const proto::CommandSpec* find_command(std::string_view name);
 
 // One line in words, e.g. "stepper 1 forward 1000 steps at 1/128 step, 500 us per step".
 std::string describe(const Command& command);
+
+// Signed positions in 1/256 step, as the protocol writes them: "-1600", "0", "409600".
+std::string position_text(int64_t position);
 
 }  // namespace hmc

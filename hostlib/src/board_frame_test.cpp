@@ -1,0 +1,152 @@
+// Unit tests of the board -> host frames: decode_board_frame's verdicts and diagnostics, the
+// typed values, encode_board_frame, is_event and the descriptions in words.
+#include "hmc/board_frame.h"
+
+#include <catch2/catch.hpp>
+
+#include "hmc/command_json.h"
+
+using hmc::decode_board_frame;
+using hmc::proto::ChecksumMode;
+using hmc::proto::Reason;
+
+namespace {
+
+hmc::Diagnostic refusal(std::string_view line, ChecksumMode mode = ChecksumMode::kSum) {
+  auto r = decode_board_frame(line, mode);
+  REQUIRE_FALSE(r.ok());
+  return r.error();
+}
+
+}  // namespace
+
+TEST_CASE("replies: ACK and NAK") {
+  auto ack = decode_board_frame("STX#1#ACK#0#ETX\n");
+  REQUIRE(ack.ok());
+  CHECK(std::holds_alternative<hmc::Ack>(*ack));
+  CHECK_FALSE(hmc::is_event(*ack));
+  CHECK(hmc::describe(*ack) == "accepted");
+  CHECK(decode_board_frame("STX#1#ACK#20688#ETX", ChecksumMode::kCrc16).ok());
+
+  auto nak = decode_board_frame("STX#4#NAK#8#8#24#40#ETX");
+  REQUIRE(nak.ok());
+  CHECK(std::get<hmc::Nak>(*nak) == hmc::Nak{Reason::kChecksumMismatch, 8, 24});
+  CHECK(hmc::describe(*nak) == "refused: checksum_mismatch at token 8, byte 24");
+  auto too_long = decode_board_frame("STX#4#NAK#1#255#128#128#ETX");
+  REQUIRE(too_long.ok());
+  CHECK(hmc::describe(*too_long) == "refused: line_too_long byte 128");
+  CHECK(hmc::board_frame_to_json(*too_long)["token"].is_null());
+  // A reason this host does not know yet is still a reply.
+  auto newer = decode_board_frame("STX#4#NAK#200#7#20#227#ETX");
+  REQUIRE(newer.ok());
+  CHECK(hmc::describe(*newer) == "refused: reason 200 at token 7, byte 20");
+}
+
+TEST_CASE("STA carries a signed position and packed flags") {
+  // motor 1 moving, at -1600 toward 0, 1000 steps/s, flags: homed, end 0 pressed, log2 4 (1/16).
+  const uint32_t flags = 1 | 2 | (4 << 4);
+  const std::string line = "STX#9#STA#1#1#1#1600#0#0#1000#" + std::to_string(flags) + "#" +
+                           std::to_string((1 + 1 + 1 + 1600 + 1000 + flags) % 256) + "#ETX";
+  auto r = decode_board_frame(line);
+  REQUIRE(r.ok());
+  const auto& s = std::get<hmc::MotorStatus>(*r);
+  CHECK(s == hmc::MotorStatus{1, hmc::MotorState::kMoving, -1600, 0, 1000, true, 1, false, 16});
+  CHECK(hmc::describe(*r) ==
+        "motor 1 moving at 1000 steps/s, at -1600 (1/256 step), toward 0, 1/16 step, homed, switch at end 0 pressed");
+  CHECK(*hmc::encode_board_frame(*r) == line);
+  const auto json = hmc::board_frame_to_json(*r);
+  CHECK(json["state"] == "moving");
+  CHECK(json["position"] == -1600);
+  CHECK(json["microstep"] == 16);
+}
+
+TEST_CASE("events are told by their name") {
+  auto evd = decode_board_frame("STX#5#EVD#1#2#1#1600#68#ETX");
+  REQUIRE(evd.ok());
+  CHECK(hmc::is_event(*evd));
+  CHECK(hmc::describe(*evd) == "motor 1 stopped at -1600 (1/256 step)");
+  auto evh = decode_board_frame("STX#5#EVH#2#1#0#0#3#ETX");
+  REQUIRE(evh.ok());
+  CHECK(hmc::describe(*evh) == "motor 2 homed at 0 (1/256 step)");
+  auto evf = decode_board_frame("STX#3#EVF#2#3#5#ETX");
+  REQUIRE(evf.ok());
+  CHECK(hmc::describe(*evf) == "motor 2 driver fault: OTS, AOCP (STATUS 0x03)");
+  auto evb = decode_board_frame("STX#3#EVB#2#100#102#ETX");
+  REQUIRE(evb.ok());
+  CHECK(std::get<hmc::Booted>(*evb) == hmc::Booted{2, 100});
+  CHECK(hmc::describe(*evb) == "the board booted: protocol 2, firmware 0.1.0; checksums: the seed's sum");
+}
+
+TEST_CASE("VER, STB, STL and SET in words") {
+  auto ver = decode_board_frame("STX#9#VER#2#100#0#128#50000#322#3#0#" +
+                                std::to_string((2 + 100 + 128 + 50000 + 322 + 3) % 256) + "#ETX");
+  REQUIRE(ver.ok());
+  CHECK(hmc::describe(*ver) ==
+        "protocol 2, firmware 0.1.0, 3 motors, 2 servos, 2 LED strips, limit switches on motors 1 and 2, lines up to "
+        "128 bytes, up to 50000 steps/s, checksums: the seed's sum");
+  auto stb = decode_board_frame("STX#5#STB#0#9#1472#0#" + std::to_string((9 + 1472) % 256) + "#ETX");
+  REQUIRE(stb.ok());
+  CHECK(std::get<hmc::BoardStatus>(*stb).limit_pressed(2, 1));
+  CHECK(hmc::describe(*stb) ==
+        "emergency switch released; limit switches pressed: motor 1 end 0, motor 2 end 1; servo 1 at 1472 us, servo 2 "
+        "released");
+  auto set = decode_board_frame("STX#4#SET#3#4#50000#" + std::to_string((3 + 4 + 50000) % 256) + "#ETX");
+  REQUIRE(set.ok());
+  CHECK(hmc::describe(*set) == "stepper 3: max_rate (fastest accepted move, steps/s) is 50000");
+}
+
+TEST_CASE("board frames follow the order of checks") {
+  const auto unknown = refusal("STX#6#STM#1#1#128#1000#500#94#ETX");
+  CHECK(unknown.reason == Reason::kUnknownCommand);
+  CHECK(unknown.token == 2);
+  CHECK(unknown.offset == 6);
+  CHECK(unknown.message.find("STM is one of the commands (host to board)") != std::string::npos);
+  // Unknown name before the name's length.
+  CHECK(refusal("STX#2#XYZ#1#1#ETX").reason == Reason::kUnknownCommand);
+  const auto length = refusal("STX#2#ACK#1#1#ETX");
+  CHECK(length.reason == Reason::kBadLength);
+  CHECK(length.expected == 1);
+  CHECK(length.found == 2);
+  // Checksum before range.
+  CHECK(refusal("STX#2#EVE#2#3#ETX").reason == Reason::kChecksumMismatch);
+  const auto range = refusal("STX#2#EVE#2#2#ETX");
+  CHECK(range.reason == Reason::kOutOfRange);
+  CHECK(range.token == 3);
+  CHECK(range.field == "pressed");
+  // A setting's value by the setting's range.
+  const auto value = refusal("STX#4#SET#1#2#6#9#ETX");
+  CHECK(value.reason == Reason::kOutOfRange);
+  CHECK(value.token == 5);
+  CHECK(value.message == "value is 6: expected 0-5 for setting 2 (decay)");
+  // CRC mode: a checksum above 65535, the seed's sum.
+  CHECK(refusal("STX#1#ACK#65536#ETX", ChecksumMode::kCrc16).reason == Reason::kOutOfRange);
+  const auto sum = refusal("STX#1#ACK#00000#ETX", ChecksumMode::kCrc16);
+  CHECK(sum.reason == Reason::kChecksumMismatch);
+  CHECK(sum.expected == 20688);
+  // CRC mode: the checksum field is exactly 5 digits.
+  for (const char* line : {"STX#1#ACK#0#ETX", "STX#1#ACK#2068#ETX", "STX#1#ACK#020688#ETX"}) {
+    INFO(line);
+    const auto width = refusal(line, ChecksumMode::kCrc16);
+    CHECK(width.reason == Reason::kBadNumber);
+    CHECK(width.token == 3);
+    CHECK(width.message.find("in CRC-16 mode the checksum is exactly 5 digits") != std::string::npos);
+  }
+}
+
+TEST_CASE("encode_board_frame refuses what the wire cannot carry") {
+  auto far = hmc::encode_board_frame(hmc::MotionEnded{1, hmc::MotionEnd::kCompleted, int64_t{1} << 31});
+  REQUIRE_FALSE(far.ok());
+  CHECK(far.error().reason == Reason::kOutOfRange);
+  CHECK(far.error().field == "pos");
+  hmc::MotorStatus odd;
+  odd.microstep = 3;
+  auto bad_microstep = hmc::encode_board_frame(odd);
+  REQUIRE_FALSE(bad_microstep.ok());
+  CHECK(bad_microstep.error().field == "flags");
+  auto motor = hmc::encode_board_frame(hmc::LimitChanged{4, 0, true});
+  REQUIRE_FALSE(motor.ok());
+  CHECK(motor.error().field == "motor");
+  CHECK(*hmc::encode_board_frame(hmc::MotionEnded{1, hmc::MotionEnd::kCompleted, -2147483647}) ==
+        "STX#5#EVD#1#1#1#2147483647#" + std::to_string((1 + 1 + 1 + 2147483647u) % 256) + "#ETX");
+  CHECK(*hmc::encode_board_frame(hmc::Ack{}, ChecksumMode::kCrc16) == "STX#1#ACK#20688#ETX");
+}

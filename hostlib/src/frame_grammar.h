@@ -1,0 +1,88 @@
+// The frame grammar of docs/protocol.md as the host reads it, for both directions: host ->
+// board commands (decode) and board -> host frames (decode_board_frame) share it, each with its
+// own table of names. Internal to libhmc; the public API is codec.h and board_frame.h.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "core/crc16.h"
+#include "core/protocol_facts.h"
+#include "hmc/codec.h"
+#include "hmc/result.h"
+
+namespace hmc::grammar {
+
+// What the grammar needs of one kind of frame: a CommandSpec or a BoardFrameSpec.
+struct Shape {
+  const char* name;
+  uint32_t value_count;
+  const proto::FieldSpec* fields;
+  int action_field;  // -1: none
+};
+
+// The frames one side may send, and how messages call them.
+struct ShapeTable {
+  const Shape* shapes;
+  std::size_t count;
+  const char* noun;    // "command", "board frame"
+  const char* plural;  // "commands", "board frames"
+
+  const Shape* find(std::string_view name) const;
+  std::size_t index_of(const Shape& shape) const { return static_cast<std::size_t>(&shape - shapes); }
+  std::string names() const;  // "STM, SVM and LED"
+};
+const ShapeTable& command_shapes();      // proto::kCommands, in CommandId order
+const ShapeTable& board_frame_shapes();  // proto::kBoardFrames, in BoardFrameId order
+
+// A frame that passed steps 1-14 of the order of checks.
+struct Frame {
+  const Shape* shape = nullptr;
+  std::array<uint32_t, proto::kMaxValues> values{};
+  std::array<std::size_t, proto::kMaxValues> offsets{};  // in the line
+  bool canonical = true;
+};
+
+bool is_blank_byte(char c);
+bool is_frame_byte(char c);
+std::string_view strip_blanks(std::string_view s, std::size_t& lead);
+// 1-10 decimal digits up to INT_MAX; anything else is not a number.
+std::optional<uint32_t> parse_number(std::string_view text);
+// Text in single quotes, bytes outside printable ASCII as \xHH.
+std::string quote(std::string_view s);
+
+Diagnostic refuse(proto::Reason reason, int token, std::size_t offset, std::string field, std::string message,
+                  uint32_t expected = 0, uint32_t found = 0);
+Diagnostic value_not_a_number(const Shape& shape, uint32_t i, std::string_view text, std::size_t offset);
+Diagnostic unknown_name(const ShapeTable& table, std::string_view name, std::size_t offset);
+
+// Steps 1-14: length, blanks, bytes, start, end, lengths, name, numbers, checksum. A line may
+// end in one LF, CRLF or CR, which is removed. A blank line is refused as bad_start.
+Result<Frame, Diagnostic> parse_frame(std::string_view line, proto::ChecksumMode mode, const ShapeTable& table);
+
+// Steps 15-16: ranges left to right under the action's exemptions and the setting's range, then
+// the switch rule. `offsets[i]` is where value i starts in the text the diagnostic refers to.
+std::optional<Diagnostic> check_values(const Shape& shape, const uint32_t* values, const std::size_t* offsets);
+
+// Where each value starts in the canonical frame of these values.
+std::array<std::size_t, proto::kMaxValues> canonical_offsets(const Shape& shape, const uint32_t* values);
+
+// The canonical frame's bytes up to its checksum field: "STX#<len>#<NAME>#v1#...#vn#".
+std::string frame_head(const Shape& shape, const uint32_t* values);
+// The checksum field of the canonical frame of these values.
+uint32_t checksum_of(const Shape& shape, const uint32_t* values, proto::ChecksumMode mode);
+// A CRC-16 as the checksum field writes it: exactly proto::kCrcDigits digits, zero-padded.
+std::string crc_text(uint32_t crc);
+// The canonical frame of these values, checksum in `mode`, no line end. Does not check ranges.
+std::string write_frame(const Shape& shape, const uint32_t* values, proto::ChecksumMode mode);
+
+// The seed's checksum: the values' sum mod 256.
+uint32_t sum_of(const uint32_t* values, uint32_t count);
+// The CRC-16 checksum of a frame's bytes from the 'S' of STX through the '#' before the checksum.
+uint32_t crc_of(std::string_view bytes);
+
+}  // namespace hmc::grammar
