@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include "exit_codes.h"
+#include "flash_command.h"
 #include "frame_command.h"
 
 #ifndef HMC_VERSION
@@ -21,11 +22,13 @@ int main(int argc, char** argv) {
       "  hmc frame encode '[#SVM#1#135]'           # spec's command-set notation\n"
       "  hmc frame decode 'STX#6#STM#3#1#1#11#1000#238#ETX'\n"
       "  hmc frame check frames.txt                # one verdict per line\n"
+      "  hmc flash --port /dev/ttyACM0 --dry-run   # what flashing the built firmware would run\n"
       "\n"
       "Exit codes: 0 ok, 1 refused/invalid frame, 2 usage error, 3 file or port error.");
 
   int exit_code = hmc::cli::kExitOk;
   hmc::cli::add_frame_command(app, exit_code);
+  hmc::cli::add_flash_command(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,501 @@
+// Instruction counts of the firmware core on a Cortex-M0 under qemu (scripts/bench qemu).
+//
+// Method (docs/performance.md, "Cost on the CPU"): qemu runs with -icount shift=10, so every
+// guest instruction takes exactly 1024 ns of virtual time, and the microbit's SysTick counts
+// the 16 MHz core clock of virtual time: 16.384 ticks per instruction. measure() reads SysTick,
+// calls a function, reads SysTick again; the same measurement of an empty function (one `bx lr`)
+// is subtracted, so a result is the exact number of instructions the function executed,
+// its own return included. A calibration loop of known length checks the arithmetic.
+//
+// The core (StepScheduler, FrameParser) is compiled exactly as for the board (-Os, M0+); the
+// HAL is faked with a register write per call, and what the fakes cost is measured and
+// reported on its own.
+#include <stdint.h>
+
+#include "firmware/core/frame_parser.h"
+#include "firmware/core/step_scheduler.h"
+#include "semihost.h"
+
+using hmc::fw::FrameParser;
+using hmc::fw::MoveSpec;
+using hmc::fw::StepScheduler;
+using hmc::fw::StepStatus;
+using hmc::hal::Ticks;
+
+namespace {
+
+// ---- measuring --------------------------------------------------------------------------------
+
+using Fn = void (*)(void*, uint32_t);
+
+volatile uint32_t* const kSysTickCsr = reinterpret_cast<volatile uint32_t*>(0xE000E010);
+volatile uint32_t* const kSysTickRvr = reinterpret_cast<volatile uint32_t*>(0xE000E014);
+volatile uint32_t* const kSysTickCvr = reinterpret_cast<volatile uint32_t*>(0xE000E018);
+
+// 16 MHz SysTick, 1024 ns per instruction: 16.384 = 16384 / 1000 ticks per instruction.
+constexpr uint32_t kTicksPerInstrNum = 16384;
+constexpr uint32_t kTicksPerInstrDen = 1000;
+
+extern "C" {
+// One instruction: the reference every measurement subtracts.
+__attribute__((naked, noinline)) void empty_fn(void*, uint32_t) { asm volatile("bx lr"); }
+// 2·n + 1 instructions (n ≥ 1): the calibration loop.
+__attribute__((naked, noinline)) void spin_fn(void*, uint32_t) {
+  asm volatile(
+      ".syntax unified\n"
+      "1: subs r1, #1\n"
+      "   bne 1b\n"
+      "   bx lr\n");
+}
+}
+
+// SysTick ticks (down-counter, 24 bits) across one call of fn(a0, a1).
+__attribute__((noinline)) uint32_t measure_ticks(Fn fn, void* a0, uint32_t a1) {
+  asm volatile("" ::: "memory");
+  const uint32_t before = *kSysTickCvr;
+  asm volatile("" ::: "memory");
+  fn(a0, a1);
+  asm volatile("" ::: "memory");
+  const uint32_t after = *kSysTickCvr;
+  asm volatile("" ::: "memory");
+  return (before - after) & 0xFFFFFFu;
+}
+
+// Instructions in a tick count, rounded. SysTick shows floor(phase + 16.384·k) after k
+// instructions, so a difference is off by at most one tick (0.06 instruction): rounding is exact.
+uint32_t ticks_to_instructions(uint32_t ticks) {
+  const uint64_t scaled = uint64_t{ticks} * kTicksPerInstrDen;
+  return static_cast<uint32_t>((scaled + kTicksPerInstrNum / 2) / kTicksPerInstrNum);
+}
+
+// Instructions of the measuring window itself: the empty measurement minus the empty
+// function's one instruction (set by calibrate()).
+uint32_t g_window = 0;
+
+// Instructions fn executed, its return included.
+uint32_t instructions(Fn fn, void* a0, uint32_t a1) {
+  return ticks_to_instructions(measure_ticks(fn, a0, a1)) - g_window;
+}
+
+// ---- output -----------------------------------------------------------------------------------
+
+char g_line[320];
+uint32_t g_len = 0;
+
+void put(const char* s) {
+  while (*s != 0 && g_len + 1 < sizeof g_line) g_line[g_len++] = *s++;
+}
+void put_u(uint64_t v) {
+  char digits[24];
+  int n = 0;
+  do {
+    digits[n++] = static_cast<char>('0' + v % 10);
+    v /= 10;
+  } while (v != 0);
+  char out[24];
+  for (int i = 0; i < n; ++i) out[i] = digits[n - 1 - i];
+  out[n] = 0;
+  put(out);
+}
+// v / den with one decimal, rounded.
+void put_ratio(uint64_t v, uint64_t den) {
+  const uint64_t tenths = (v * 10 + den / 2) / den;
+  put_u(tenths / 10);
+  char frac[3] = {'.', static_cast<char>('0' + tenths % 10), 0};
+  put(frac);
+}
+void flush() {
+  g_line[g_len] = 0;
+  semihost_write(g_line);
+  g_len = 0;
+}
+void line(const char* s) {
+  put(s);
+  put("\n");
+  flush();
+}
+
+bool g_ok = true;
+void fail(const char* what) {
+  put("bench: FAILED: ");
+  put(what);
+  put("\n");
+  flush();
+  g_ok = false;
+}
+
+// ---- statistics -------------------------------------------------------------------------------
+
+// Per interrupt: instructions (15 bits), and bit 15 set when the last edge written was a rise.
+constexpr uint32_t kMaxSamples = 2200;
+constexpr uint16_t kRiseFlag = 0x8000;
+uint16_t g_samples[kMaxSamples];
+uint16_t g_work[kMaxSamples];
+
+// Statistics of the samples whose flag matches `mask`/`want` (mask 0: all).
+struct Stats;
+Stats select_stats(uint32_t n, uint16_t mask, uint16_t want);
+
+void sort(uint16_t* a, uint32_t n) {  // shell sort: small and good enough for 2 200 samples
+  for (uint32_t gap = n / 2; gap > 0; gap /= 2) {
+    for (uint32_t i = gap; i < n; ++i) {
+      const uint16_t v = a[i];
+      uint32_t j = i;
+      for (; j >= gap && a[j - gap] > v; j -= gap) a[j] = a[j - gap];
+      a[j] = v;
+    }
+  }
+}
+
+struct Stats {
+  uint32_t count = 0;
+  uint64_t total = 0;
+  uint32_t median = 0;
+  uint32_t p99 = 0;
+  uint32_t max = 0;
+};
+
+Stats stats_of(uint16_t* a, uint32_t n) {
+  Stats s;
+  s.count = n;
+  for (uint32_t i = 0; i < n; ++i) s.total += a[i];
+  if (n == 0) return s;
+  sort(a, n);
+  s.median = a[n / 2];
+  s.p99 = a[(n * 99) / 100];
+  s.max = a[n - 1];
+  return s;
+}
+
+Stats select_stats(uint32_t n, uint16_t mask, uint16_t want) {
+  uint32_t k = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    if ((g_samples[i] & mask) == want) g_work[k++] = static_cast<uint16_t>(g_samples[i] & ~kRiseFlag);
+  }
+  return stats_of(g_work, k);
+}
+
+// ---- fake HAL ---------------------------------------------------------------------------------
+
+// The board's HAL reads a timer register for now(), writes a compare register for schedule()
+// and a port register for the pins; these do the same amount of work on plain variables.
+volatile uint32_t g_port = 0;  // the "PORT" register: (motor << 1) | level, last write
+volatile uint32_t g_dir = 0;
+
+class FakeTimer final : public hmc::hal::StepTimer {
+ public:
+  Ticks now() const override { return clock; }
+  void schedule(Ticks when) override { due = when; }
+  Ticks clock = 0;
+  Ticks due = ~Ticks{0};
+};
+
+class FakePins final : public hmc::hal::StepPins {
+ public:
+  void set_dir(uint8_t motor, bool reverse) override { g_dir = (uint32_t{motor} << 1) | reverse; }
+  void set_step(uint8_t motor, bool high) override { g_port = (uint32_t{motor} << 1) | high; }
+};
+
+// The same, counting their calls (a separate, unmeasured run of each scenario).
+struct HalCalls {
+  uint32_t now = 0, schedule = 0, set_step = 0, set_dir = 0;
+};
+
+class CountingTimer final : public hmc::hal::StepTimer {
+ public:
+  Ticks now() const override {
+    ++calls->now;
+    return clock;
+  }
+  void schedule(Ticks when) override {
+    ++calls->schedule;
+    due = when;
+  }
+  Ticks clock = 0;
+  Ticks due = ~Ticks{0};
+  HalCalls* calls = nullptr;
+};
+
+class CountingPins final : public hmc::hal::StepPins {
+ public:
+  void set_dir(uint8_t motor, bool reverse) override {
+    ++calls->set_dir;
+    g_dir = (uint32_t{motor} << 1) | reverse;
+  }
+  void set_step(uint8_t motor, bool high) override {
+    ++calls->set_step;
+    g_port = (uint32_t{motor} << 1) | high;
+  }
+  HalCalls* calls = nullptr;
+};
+
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpmf-conversions"
+// The code a member function runs, as a plain function (GCC's bound-member extraction).
+Fn on_step_timer_fn() { return (Fn)(&StepScheduler::on_step_timer); }
+Fn feed_fn() { return (Fn)(&FrameParser::feed); }
+template <typename T, typename M>
+Fn bound(T& object, M member) {
+  return (Fn)(object.*member);
+}
+#pragma GCC diagnostic pop
+
+struct HalCost {
+  uint32_t now, schedule, set_step, set_dir;
+};
+
+// ---- step scheduler scenarios -----------------------------------------------------------------
+
+struct Scenario {
+  const char* name;
+  uint8_t motors;
+  uint32_t steps[3];
+  uint32_t interval[3];
+  uint32_t accel;
+};
+
+struct Result {
+  uint32_t interrupts = 0;
+  uint32_t steps = 0;
+  HalCalls calls;
+  bool ok = true;
+};
+
+// Starts the scenario's moves at tick 1000 and plays every interrupt until all motors rest.
+// With measure, records each call's instructions (and the edge it wrote last) in g_samples.
+
+template <typename Timer, typename Pins>
+Result play(const Scenario& sc, Timer& timer, Pins& pins, bool measure) {
+  Result r;
+  StepScheduler sched(timer, pins);
+  timer.clock = 1000;
+  for (uint8_t m = 0; m < sc.motors; ++m) {
+    const MoveSpec spec{false, 16, sc.steps[m], sc.interval[m], sc.accel};
+    if (sched.start(static_cast<uint8_t>(m + 1), spec) != StepStatus::kOk) r.ok = false;
+  }
+  const Fn fn = on_step_timer_fn();
+  while (timer.due != ~Ticks{0}) {
+    if (r.interrupts >= kMaxSamples) {
+      r.ok = false;
+      break;
+    }
+    timer.clock = timer.due;
+    timer.due = ~Ticks{0};
+    if (measure) {
+      g_port = 0;
+      const uint32_t n = instructions(fn, &sched, 0);
+      g_samples[r.interrupts] = static_cast<uint16_t>((n > 0x7FFF ? 0x7FFF : n) |
+                                                      ((g_port & 1) != 0 ? kRiseFlag : 0));
+    } else {
+      sched.on_step_timer();
+    }
+    ++r.interrupts;
+  }
+  for (uint8_t m = 1; m <= sc.motors; ++m) {
+    if (sched.is_running(m) || sched.steps_done(m) != sc.steps[m - 1]) r.ok = false;
+    r.steps += sched.steps_done(m);
+  }
+  if (sched.clamped_edges() != 0) r.ok = false;
+  return r;
+}
+
+void run_scenario(const Scenario& sc, const HalCost& hal) {
+  HalCalls calls;
+  CountingTimer ct;
+  CountingPins cp;
+  ct.calls = &calls;
+  cp.calls = &calls;
+  const Result counted = play(sc, ct, cp, false);
+  FakeTimer timer;
+  FakePins pins;
+  const Result r = play(sc, timer, pins, true);
+  if (!counted.ok || !r.ok || counted.interrupts != r.interrupts) {
+    fail(sc.name);
+    return;
+  }
+  // Split by the edge each interrupt wrote last (exact with one motor).
+  const Stats all = select_stats(r.interrupts, 0, 0);
+  const Stats rs = select_stats(r.interrupts, kRiseFlag, kRiseFlag);
+  const Stats fs = select_stats(r.interrupts, kRiseFlag, 0);
+  const uint64_t hal_total = uint64_t{calls.now} * hal.now + uint64_t{calls.schedule} * hal.schedule +
+                             uint64_t{calls.set_step} * hal.set_step +
+                             uint64_t{calls.set_dir} * hal.set_dir;
+  // | scenario | steps | interrupts | per interrupt: median / p99 / max | rise median | fall
+  // median | per step (mean) | of which fake HAL | per step without fake HAL |
+  put("| ");
+  put(sc.name);
+  put(" | ");
+  put_u(r.steps);
+  put(" | ");
+  put_u(r.interrupts);
+  put(" | ");
+  put_u(all.median);
+  put(" / ");
+  put_u(all.p99);
+  put(" / ");
+  put_u(all.max);
+  put(" | ");
+  put_u(rs.median);
+  put(" | ");
+  put_u(fs.median);
+  put(" | ");
+  put_ratio(all.total, r.steps);
+  put(" | ");
+  put_ratio(hal_total, r.steps);
+  put(" | ");
+  put_ratio(all.total - hal_total, r.steps);
+  put(" |");
+  flush();
+  put("\n");
+  flush();
+}
+
+// ---- parser -----------------------------------------------------------------------------------
+
+void run_parser() {
+  static const char* const kFrames[] = {
+      "STX#6#STM#1#1#128#1000#500#94#ETX\n",
+  };
+  for (const char* frame : kFrames) {
+    FrameParser parser;
+    uint32_t length = 0;
+    while (frame[length] != 0) ++length;
+    // Check the frame is accepted (plain calls), then measure a fresh parser byte by byte.
+    bool judged = false;
+    for (uint32_t i = 0; i < length; ++i) judged = parser.feed(static_cast<uint8_t>(frame[i]));
+    if (!judged || parser.verdict().reason != hmc::proto::Reason::kOk) {
+      fail("the benchmark frame is refused");
+      return;
+    }
+    uint64_t body = 0;
+    uint32_t body_max = 0, end = 0;
+    const Fn fn = feed_fn();
+    for (uint32_t i = 0; i < length; ++i) {
+      const uint32_t n = instructions(fn, &parser, static_cast<uint8_t>(frame[i]));
+      if (i + 1 < length) {
+        body += n;
+        if (n > body_max) body_max = n;
+      } else {
+        end = n;
+      }
+    }
+    if (parser.verdict().reason != hmc::proto::Reason::kOk) fail("measured frame refused");
+    put("| `");
+    for (uint32_t i = 0; i + 1 < length; ++i) {
+      const char c[2] = {frame[i], 0};
+      put(c);
+    }
+    put("\\n` | ");
+    put_u(length);
+    put(" | ");
+    put_ratio(body, length - 1);
+    put(" (max ");
+    put_u(body_max);
+    put(") | ");
+    put_u(end);
+    put(" | ");
+    put_u(body + end);
+    put(" | ");
+    put_ratio(body + end, length);
+    put(" |\n");
+    flush();
+  }
+}
+
+// ---- calibration ------------------------------------------------------------------------------
+
+void calibrate() {
+  // The empty measurement, several times: in instructions it must not vary (in ticks it may, by
+  // one, with the phase of the 16.384 ticks per instruction).
+  uint32_t e[4];
+  for (uint32_t& x : e) x = measure_ticks(empty_fn, nullptr, 0);
+  const uint32_t empty = ticks_to_instructions(e[0]);
+  g_window = empty - 1;
+  for (uint32_t x : e) {
+    if (ticks_to_instructions(x) != empty) fail("the empty measurement varies");
+  }
+  line("Calibration: the loop `1: subs r1, #1; bne 1b; bx lr` runs 2n + 1 instructions.");
+  line("");
+  line("| n | SysTick ticks | measured: round(ticks / 16.384) - window | expected 2n + 1 |");
+  line("|---|---|---|---|");
+  static const uint32_t kLoops[] = {1, 10, 100, 1000, 10000, 100000};
+  for (uint32_t n : kLoops) {
+    const uint32_t ticks = measure_ticks(spin_fn, nullptr, n);
+    const uint32_t got = instructions(spin_fn, nullptr, n);
+    put("| ");
+    put_u(n);
+    put(" | ");
+    put_u(ticks);
+    put(" | ");
+    put_u(got);
+    put(" | ");
+    put_u(2 * n + 1);
+    put(" |\n");
+    flush();
+    if (got != 2 * n + 1) fail("calibration");
+  }
+  put("\nEmpty measurement: ");
+  put_u(e[0]);
+  put(" ticks = ");
+  put_u(empty);
+  put(" instructions, of which the window (subtracted from every figure) is ");
+  put_u(g_window);
+  put(" and the empty function's bx lr 1.\n\n");
+  flush();
+}
+
+}  // namespace
+
+int main() {
+  *kSysTickRvr = 0xFFFFFF;
+  *kSysTickCvr = 0;
+  *kSysTickCsr = 0x5;  // enable, processor clock, no interrupt
+
+  calibrate();
+
+  // What the fakes cost: each body run alone (its own return included).
+  FakeTimer timer;
+  FakePins pins;
+  HalCost hal{};
+  hal.now = instructions(bound(timer, &FakeTimer::now), &timer, 0);
+  hal.schedule = instructions(bound(timer, &FakeTimer::schedule), &timer, 0);
+  hal.set_step = instructions(bound(pins, &FakePins::set_step), &pins, 1);
+  hal.set_dir = instructions(bound(pins, &FakePins::set_dir), &pins, 1);
+  put("Fake HAL, instructions per call (body and return): now() ");
+  put_u(hal.now);
+  put(", schedule() ");
+  put_u(hal.schedule);
+  put(", set_step() ");
+  put_u(hal.set_step);
+  put(", set_dir() ");
+  put_u(hal.set_dir);
+  put(".\n\n");
+  flush();
+
+  line("StepScheduler::on_step_timer, instructions per call (one call = one interrupt; a step is "
+       "a rising and a falling edge):");
+  line("");
+  line("| scenario | steps | interrupts | per interrupt median / p99 / max | rise median | "
+       "fall median | per step (mean) | of it fake HAL | per step without fake HAL |");
+  line("|---|---|---|---|---|---|---|---|---|");
+  // Constant rate: 1/16 microstep at 10 kHz; three motors on their own grids (100, 130, 177 µs).
+  // Ramping: triangles (accelerating then braking the whole move, never cruising).
+  static const Scenario kScenarios[] = {
+      {"1 motor, constant rate", 1, {1000, 0, 0}, {4800, 0, 0}, 0},
+      {"1 motor, ramping", 1, {1000, 0, 0}, {2400, 0, 0}, 50000},
+      {"3 motors, constant rate", 3, {450, 350, 250}, {4800, 6240, 8496}, 0},
+      {"3 motors, constant rate, same grid", 3, {450, 450, 450}, {4800, 4800, 4800}, 0},
+      {"3 motors, ramping", 3, {450, 350, 250}, {2400, 3120, 4248}, 50000},
+  };
+  for (const Scenario& sc : kScenarios) run_scenario(sc, hal);
+
+  line("");
+  line("FrameParser::feed, instructions per call:");
+  line("");
+  line("| frame | bytes | per byte before the line end (mean) | line end (verdict) | whole "
+       "frame | per byte, whole frame |");
+  line("|---|---|---|---|---|---|");
+  run_parser();
+
+  return g_ok ? 0 : 1;
+}
