@@ -21,6 +21,7 @@
 #include "hmc/command_json.h"
 #include "hmc/line_splitter.h"
 #include "vector_input.h"
+#include "core/testing/capture_port.h"
 
 namespace {
 
@@ -114,14 +115,7 @@ struct Tally {
   int board_lines = 0, board_host_ok = 0, board_written = 0, board_writer_ok = 0;
 };
 
-class CapturePort : public hmc::hal::SerialPort {
- public:
-  int read_byte() override { return -1; }
-  void write(const uint8_t* bytes, uint32_t count) override {
-    text.append(reinterpret_cast<const char*>(bytes), count);
-  }
-  std::string text;
-};
+using hmc::testing::CapturePort;
 
 json board_verdict_json(const hmc::Result<hmc::BoardFrame, hmc::Diagnostic>& r) {
   if (r) return {{"verdict", "accepted"}, {"frame", hmc::board_frame_to_json(*r)}, {"event", hmc::is_event(*r)}};

@@ -7,17 +7,11 @@
 #include <string>
 
 #include "core/frame_parser.h"
+#include "core/testing/capture_port.h"
 
 namespace {
 
-class CapturePort : public hmc::hal::SerialPort {
- public:
-  int read_byte() override { return -1; }
-  void write(const uint8_t* bytes, uint32_t count) override {
-    text.append(reinterpret_cast<const char*>(bytes), count);
-  }
-  std::string text;
-};
+using hmc::testing::CapturePort;
 
 // Feeds `line` and LF; returns the parser for its token_offset().
 hmc::fw::FrameParser parsed(const std::string& line) {

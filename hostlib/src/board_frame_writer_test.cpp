@@ -11,19 +11,13 @@
 
 #include "core/reply_writer.h"
 #include "hmc/board_frame.h"
+#include "core/testing/capture_port.h"
 
 namespace {
 
 namespace proto = hmc::proto;
 
-class CapturePort : public hmc::hal::SerialPort {
- public:
-  int read_byte() override { return -1; }
-  void write(const uint8_t* bytes, uint32_t count) override {
-    text.append(reinterpret_cast<const char*>(bytes), count);
-  }
-  std::string text;
-};
+using hmc::testing::CapturePort;
 
 // The range a field's value may take, given the values before it.
 void range_of(const proto::FieldSpec& field, const std::vector<uint32_t>& before, uint32_t& min, uint32_t& max) {
