@@ -22,17 +22,6 @@ using hmc::sim::Ticks;
 
 namespace {
 
-const char* state_name(hmc::fw::MotorState state) {
-  switch (state) {
-    case hmc::fw::MotorState::kIdle: return "idle";
-    case hmc::fw::MotorState::kMoving: return "moving";
-    case hmc::fw::MotorState::kHoming: return "homing";
-    case hmc::fw::MotorState::kChanging: return "changing";
-    case hmc::fw::MotorState::kSelfTest: return "self_test";
-  }
-  return "?";
-}
-
 SimConfig config_for(const json& vector, const std::string& mode) {
   SimConfig config;
   config.options.self_test = false;
@@ -130,7 +119,7 @@ std::vector<std::string> check(SimBoard& board, const json& expect, Output& outp
       if (key == "steps") got = board.steps(id);
       else if (key == "position") got = c.position(id);
       else if (key == "axis") got = board.axis_position(id);
-      else if (key == "state") got = state_name(c.state(id));
+      else if (key == "state") got = hmc::sim::state_name(c.state(id));
       else if (key == "running") got = c.scheduler().is_running(id);
       else if (key == "homed") got = c.homed(id);
       else if (key == "microstep") got = board.driver_microstep(id);

@@ -75,14 +75,7 @@ void Controller::boot() {
   send(BoardFrameId::kBooted, booted);
   check_switches();
 
-  if (!options_.self_test || emergency_) return;
-  for (uint8_t motor = 1; motor <= proto::kMotorCount; ++motor) {
-    const MoveSpec forward{false, static_cast<uint16_t>(kBootMicrostep), kSelfTestSteps,
-                           kSelfTestDelayUs * hal::kTicksPerMicrosecond, 0};
-    if (start_move(motor, forward, 1000000u / kSelfTestDelayUs, MotorState::kSelfTest) == Reason::kOk) {
-      self_test_phase_ = 1;
-    }
-  }
+  if (options_.self_test && !emergency_) start_self_test();
 }
 
 void Controller::poll() {

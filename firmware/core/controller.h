@@ -188,6 +188,7 @@ class Controller {
   void check_motions();
   void motion_ended(uint8_t motor);
   void homing_step(uint8_t motor);
+  void start_self_test();
   void abort_self_test();
   void advance_self_test();
 

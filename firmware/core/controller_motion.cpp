@@ -256,6 +256,17 @@ void Controller::motion_ended(uint8_t motor) {
 // ---------------------------------------------------------------------------------------
 // Self-test
 
+// Phase 1: every motor half a turn forward.
+void Controller::start_self_test() {
+  for (uint8_t motor = 1; motor <= proto::kMotorCount; ++motor) {
+    const MoveSpec forward{false, static_cast<uint16_t>(kBootMicrostep), kSelfTestSteps,
+                           interval_for(kSelfTestDelayUs), 0};
+    if (start_move(motor, forward, rate_for(kSelfTestDelayUs), MotorState::kSelfTest) == Reason::kOk) {
+      self_test_phase_ = 1;
+    }
+  }
+}
+
 void Controller::abort_self_test() {
   if (self_test_phase_ == 0) return;
   self_test_phase_ = 0;

@@ -143,6 +143,17 @@ class SimBoard::Hardware final : public hal::StepTimer,
   SimBoard& b_;
 };
 
+const char* state_name(fw::MotorState state) {
+  switch (state) {
+    case fw::MotorState::kIdle: return "idle";
+    case fw::MotorState::kMoving: return "moving";
+    case fw::MotorState::kHoming: return "homing";
+    case fw::MotorState::kChanging: return "changing";
+    case fw::MotorState::kSelfTest: return "self_test";
+  }
+  return "unknown";
+}
+
 SimBoard::SimBoard(const SimConfig& config) : config_(config), hardware_(new Hardware(*this)) {
   for (uint8_t i = 0; i < 3; ++i) {
     axes_[i].config = config.axes[i];

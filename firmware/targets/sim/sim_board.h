@@ -62,6 +62,9 @@ struct SimConfig {
   uint32_t baud = 0;                // 0: received bytes arrive at once; else 10 bits per byte
 };
 
+// A motor state's name in traces, status lines and behaviour vectors.
+const char* state_name(fw::MotorState state);
+
 // One switch's forced state, for injected events.
 enum class Force : uint8_t { kNone, kPressed, kReleased };
 

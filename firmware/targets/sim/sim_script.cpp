@@ -72,22 +72,6 @@ bool to_u64(std::string_view digits, uint64_t& out) {
   return true;
 }
 
-std::string_view state_name(fw::MotorState state) {
-  switch (state) {
-    case fw::MotorState::kIdle:
-      return "idle";
-    case fw::MotorState::kMoving:
-      return "moving";
-    case fw::MotorState::kHoming:
-      return "homing";
-    case fw::MotorState::kChanging:
-      return "changing";
-    case fw::MotorState::kSelfTest:
-      return "self_test";
-  }
-  return "unknown";
-}
-
 const char* json_bool(bool b) { return b ? "true" : "false"; }
 
 }  // namespace
