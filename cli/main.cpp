@@ -4,9 +4,13 @@
 
 #include <CLI/CLI.hpp>
 
+#include "board_commands.h"
+#include "connection.h"
 #include "exit_codes.h"
 #include "flash_command.h"
 #include "frame_command.h"
+#include "ports_command.h"
+#include "sim_command.h"
 
 #ifndef HMC_VERSION
 #error "HMC_VERSION must be defined by the build"
@@ -22,12 +26,23 @@ int main(int argc, char** argv) {
       "  hmc frame encode '[#SVM#1#135]'           # spec's command-set notation\n"
       "  hmc frame decode 'STX#6#STM#3#1#1#11#1000#238#ETX'\n"
       "  hmc frame check frames.txt                # one verdict per line\n"
+      "  hmc --port sim:// move 1 3200 --accel 8000 --wait   # the simulated board, no hardware\n"
+      "  hmc --port /dev/ttyUSB0 status            # motors, switches, servos, LED strips\n"
+      "  hmc home all && hmc led 1 '#ff800000' && hmc servo 1 135\n"
+      "  hmc monitor                               # replies and events as they come\n"
       "  hmc flash --port /dev/ttyACM0 --dry-run   # what flashing the built firmware would run\n"
       "\n"
-      "Exit codes: 0 ok, 1 refused/invalid frame, 2 usage error, 3 file or port error.");
+      "Exit codes: 0 ok, 1 refused, 2 usage, 3 port or file, 4 no reply, 5 motion ended early,\n"
+      "130 interrupted (docs/cli.md).");
 
   int exit_code = hmc::cli::kExitOk;
+  hmc::cli::GlobalOptions global;
+  hmc::cli::add_global_options(app, global);
+  app.fallthrough();  // global options may follow the subcommand: `hmc status --port sim://`
   hmc::cli::add_frame_command(app, exit_code);
+  hmc::cli::add_board_commands(app, global, exit_code);
+  hmc::cli::add_ports_command(app, exit_code);
+  hmc::cli::add_sim_command(app, exit_code);
   hmc::cli::add_flash_command(app, exit_code);
   try {
     app.parse(argc, argv);

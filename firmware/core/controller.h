@@ -86,10 +86,7 @@ struct Note {
 inline constexpr Note kBootTune[] = {{1500, 120}, {2500, 120}};
 inline constexpr Note kWarningTune[] = {{800, 200}};
 
-// Servo pulse for an angle: 544 + angle·1856/180 µs, rounded (HARDWARE.md, Servos).
-constexpr uint16_t servo_pulse_us(uint32_t angle) {
-  return static_cast<uint16_t>(544u + (angle * 1856u + 90u) / 180u);
-}
+using proto::servo_pulse_us;
 
 enum class MotorState : uint8_t {
   kIdle,

@@ -108,6 +108,10 @@ inline constexpr uint32_t kServoCount = 2;
 inline constexpr uint32_t kStripCount = 2;
 // Motors 1 and 2 each have two limit switches; motor 3 has none (seed 003, 개요; DESIGN).
 constexpr bool motor_has_switches(uint32_t motor) { return motor == 1 || motor == 2; }
+// Servo pulse for an angle: 544 + angle·1856/180 µs, rounded (HARDWARE.md, Servos).
+constexpr uint16_t servo_pulse_us(uint32_t angle) {
+  return static_cast<uint16_t>(544u + (angle * 1856u + 90u) / 180u);
+}
 
 // STM's action field (its second value).
 inline constexpr uint32_t kActionStop = 0;

@@ -69,8 +69,10 @@ class SimBoard::Hardware final : public hal::StepTimer,
       axis.position += axis.reverse ? -units : units;
     }
     if (b_.record_steps_) b_.step_times_[motor - 1].push_back(b_.now_);
-    b_.trace_line("\"ev\":\"step\",\"motor\":" + std::to_string(motor) + ",\"pos\":" +
-                  std::to_string(axis.position));
+    if (b_.trace_ != nullptr) {  // the hot path: no strings built for a trace nobody reads
+      b_.trace_line("\"ev\":\"step\",\"motor\":" + std::to_string(motor) + ",\"pos\":" +
+                    std::to_string(axis.position));
+    }
     b_.update_switches(motor);
   }
 
@@ -332,6 +334,7 @@ void SimBoard::trace_line(const std::string& event_json) {
 // Collects bytes into lines for the trace; a line is written at its LF or CR.
 void SimBoard::trace_bytes(const char* event, std::string& pending, const uint8_t* bytes,
                            uint32_t count) {
+  if (trace_ == nullptr) return;
   for (uint32_t i = 0; i < count; ++i) {
     const char c = static_cast<char>(bytes[i]);
     if (c != '\n' && c != '\r') {

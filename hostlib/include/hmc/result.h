@@ -35,4 +35,8 @@ class Result {
   std::variant<T, E> state_;
 };
 
+// The result of an operation that returns nothing but may fail.
+struct Done {};
+using Status = Result<Done>;
+
 }  // namespace hmc

@@ -1,0 +1,448 @@
+// The commands that talk to a board: send, move, home, stop, servo, led, status, monitor. Each
+// parses its arguments into commands, hands them to the session, and reports in words or JSON.
+#include "board_commands.h"
+
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include "exit_codes.h"
+#include "hmc/codec.h"
+#include "hmc/command_json.h"
+#include "report.h"
+
+namespace hmc::cli {
+namespace {
+
+constexpr uint32_t kDefaultDelayUs = 500;
+constexpr uint32_t kFullStepsPerRev = 200;
+
+// One command's run: connect, act, and set the exit code; `act` returns an exit code.
+template <typename Act>
+void run_on_board(const GlobalOptions& g, int& exit_code, Act act) {
+  std::unique_ptr<Session> session = connect(g, exit_code);
+  if (session) exit_code = act(*session);
+}
+
+// "1", "2", "3" or "all" -> the motors meant.
+Result<std::vector<uint32_t>> motors_of(const std::string& text, std::vector<uint32_t> all) {
+  if (text == "all") return all;
+  if (text.size() == 1 && text[0] >= '1' && text[0] <= '0' + static_cast<int>(proto::kMotorCount)) {
+    return std::vector<uint32_t>{static_cast<uint32_t>(text[0] - '0')};
+  }
+  return Error{"motor must be 1-" + std::to_string(proto::kMotorCount) + " or all, not '" + text + "'"};
+}
+
+int usage_error(const GlobalOptions& g, const std::string& message) {
+  report_error(g, SessionError{SessionError::Kind::kInvalid, message, proto::Reason::kOk});
+  return kExitUsage;
+}
+
+enum class Motion : uint8_t { kMove, kHome, kStop };
+
+// Waits for the motors, then reports each one's end; the exit code says whether all completed.
+int wait_and_report(const GlobalOptions& g, Session& s, const std::vector<uint32_t>& motors, Motion motion) {
+  const bool homing = motion == Motion::kHome;
+  if (SessionResult<Done> waited = s.wait_until_idle(motors); !waited) {
+    const int code = report_error(g, waited.error());
+    if (waited.error().kind == SessionError::Kind::kInterrupted && !g.json) {
+      for (const uint32_t m : motors) std::cerr << "motor " << m << " stopped " << position_words(s.model().motor(m)) << '\n';
+    }
+    return code;
+  }
+  int code = kExitOk;
+  nlohmann::json out = nlohmann::json::array();
+  for (const uint32_t m : motors) {
+    const MotorStatus& motor = s.model().motor(m);
+    const std::optional<MotionEnd>& end = s.model().last_end[m - 1];
+    const bool early = homing ? (s.firmware() == Firmware::kV2 && !motor.homed)
+                              : (motion == Motion::kMove && end && *end != MotionEnd::kCompleted);
+    if (early) code = kExitIncomplete;
+    if (g.json) {
+      out.push_back(motor_to_json(motor, end));
+      continue;
+    }
+    std::string how = homing ? (motor.homed ? "homed" : "not homed: the switch was not found") : "done";
+    if (motion == Motion::kMove && end && *end != MotionEnd::kCompleted) {
+      how = std::string("ended early: ") + motion_end_name(*end);
+    }
+    if (motion == Motion::kStop) how = "stopped";
+    if (s.firmware() == Firmware::kSeed) how += " (timed: the seed firmware reports nothing)";
+    std::cout << "motor " << m << ": " << how << ", " << position_words(motor) << '\n';
+  }
+  if (g.json) std::cout << nlohmann::json{{"motors", out}} << '\n';
+  return code;
+}
+
+// --- send ---------------------------------------------------------------------------------
+
+void add_send(CLI::App& app, const GlobalOptions& g, int& exit_code) {
+  struct Options {
+    std::vector<std::string> words;
+    bool raw = false;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand("send", "send one command: a frame, [#NAME#v1#...] or NAME v1 ... and show the reply");
+  cmd->add_option("command", o->words, "STX#...#ETX, '[#SVM#1#135]', or SVM 1 135")->required();
+  cmd->add_flag("--raw", o->raw, "send the first argument's bytes unchanged, unchecked (to see the board refuse)");
+  cmd->callback([&g, &exit_code, o] {
+    run_on_board(g, exit_code, [&](Session& s) {
+      SessionResult<BoardFrame> reply = BoardFrame{Ack{}};
+      if (o->raw) {
+        if (o->words.size() != 1) return usage_error(g, "--raw takes the line as one argument (quote it)");
+        reply = s.send_line(o->words[0]);
+      } else {
+        Result<Command, Diagnostic> command =
+            o->words.size() == 1 && o->words[0].find('#') != std::string::npos ? parse_input(o->words[0])
+                                                                               : command_from_words(o->words);
+        if (!command) {
+          if (!g.json) print_refusal(std::cerr, o->words.size() == 1 ? o->words[0] : "", command.error());
+          if (g.json) report_error(g, SessionError{SessionError::Kind::kInvalid, command.error().message, command.error().reason});
+          return static_cast<int>(kExitInvalid);
+        }
+        reply = s.execute(*command);
+      }
+      if (!reply) return report_error(g, reply.error());
+      if (g.json) {
+        std::cout << nlohmann::json{{"reply", s.firmware() == Firmware::kSeed ? nlohmann::json(nullptr)
+                                                                               : board_frame_to_json(*reply)}}
+                  << '\n';
+      } else if (s.firmware() == Firmware::kSeed) {
+        std::cout << "sent (the seed firmware does not reply)\n";
+      } else {
+        print_board_frame(std::cout, *reply);
+      }
+      return static_cast<int>(kExitOk);
+    });
+  });
+}
+
+// --- move ---------------------------------------------------------------------------------
+
+struct MoveOptions {
+  uint32_t motor = 1;
+  std::optional<double> steps;
+  std::optional<double> degrees;
+  std::optional<double> revolutions;
+  std::optional<uint32_t> microstep;
+  std::optional<uint32_t> delay_us;
+  std::optional<double> rate;
+  std::optional<uint32_t> accel;
+  uint32_t steps_per_rev = kFullStepsPerRev;
+  bool run = false;
+  bool reverse = false;
+  bool wait = false;
+};
+
+// The STM frame a move's options mean, or why they are wrong.
+Result<StepperMove> move_command(const MoveOptions& o, uint32_t current_microstep) {
+  const int given = (o.steps ? 1 : 0) + (o.degrees ? 1 : 0) + (o.revolutions ? 1 : 0) + (o.run ? 1 : 0);
+  if (given != 1) return Error{"give the distance once: STEPS, --deg, --rev, or --run (until stopped)"};
+  if (o.delay_us && o.rate) return Error{"give --delay or --rate, not both"};
+  StepperMove move;
+  move.motor = o.motor;
+  move.microstep = o.microstep.value_or(current_microstep);
+  double steps = 0;
+  if (o.steps) steps = *o.steps;
+  if (o.degrees) steps = *o.degrees / 360.0 * o.steps_per_rev * move.microstep;
+  if (o.revolutions) steps = *o.revolutions * o.steps_per_rev * move.microstep;
+  if (!o.run && std::llround(steps) == 0) return Error{"the move is 0 steps (at 1/" + std::to_string(move.microstep) + " step)"};
+  if (std::fabs(steps) > 2147483647.0) return Error{"the move is more than 2147483647 steps"};
+  const bool backward = (steps < 0) != o.reverse;
+  move.dir = backward ? proto::kActionReverse : proto::kActionForward;
+  move.steps = static_cast<uint32_t>(std::llabs(std::llround(steps)));
+  move.delay_us = o.delay_us.value_or(kDefaultDelayUs);
+  if (o.rate) {
+    if (*o.rate <= 0) return Error{"--rate must be above 0 steps/s"};
+    move.delay_us = static_cast<uint32_t>(std::llround(1e6 / *o.rate));
+  }
+  return move;
+}
+
+void add_move(CLI::App& app, const GlobalOptions& g, int& exit_code) {
+  auto o = std::make_shared<MoveOptions>();
+  CLI::App* cmd = app.add_subcommand("move", "move a stepper: STEPS (negative: reverse), --deg or --rev, or --run");
+  cmd->add_option("motor", o->motor, "stepper 1-3")->required()->check(CLI::Range(1u, proto::kMotorCount));
+  cmd->add_option("steps", o->steps, "steps at the microstep (negative: reverse)");
+  cmd->add_option("--deg", o->degrees, "degrees instead of steps (--steps-per-rev full steps per turn)");
+  cmd->add_option("--rev", o->revolutions, "revolutions instead of steps");
+  cmd->add_flag("--run", o->run, "run until stopped (hmc stop)");
+  cmd->add_flag("--reverse", o->reverse, "move in reverse");
+  cmd->add_option("--microstep", o->microstep, "1, 2, 4 ... 256 (default: the motor's current one)");
+  cmd->add_option("--delay", o->delay_us, "us per step (default 500)");
+  cmd->add_option("--rate", o->rate, "steps per second instead of --delay");
+  cmd->add_option("--accel", o->accel, "steps/s^2 to ramp up and down (0: constant rate; v2 firmware)");
+  cmd->add_option("--steps-per-rev", o->steps_per_rev, "full steps per turn for --deg and --rev (default 200)")
+      ->check(CLI::Range(1u, 100000u));
+  cmd->add_flag("--wait", o->wait, "wait until the motor stops and print where it is");
+  cmd->callback([&g, &exit_code, o] {
+    run_on_board(g, exit_code, [&](Session& s) {
+      Result<StepperMove> move = move_command(*o, s.model().motor(o->motor).microstep);
+      if (!move) return usage_error(g, move.error().message);
+      if (o->accel) {
+        if (s.firmware() == Firmware::kSeed) {
+          return report_error(g, SessionError{SessionError::Kind::kRefused,
+                                              "the seed firmware has no acceleration: move at a constant rate, or plan a "
+                                              "staged ramp in a motion file",
+                                              proto::Reason::kOk});
+        }
+        SessionResult<BoardFrame> set = s.execute(SetSetting{o->motor, proto::kSettingAccel, *o->accel});
+        if (!set) return report_error(g, set.error());
+      }
+      SessionResult<BoardFrame> sent = s.execute(*move);
+      if (!sent) return report_error(g, sent.error());
+      if (o->wait) return wait_and_report(g, s, {o->motor}, Motion::kMove);
+      if (g.json) {
+        std::cout << nlohmann::json{{"started", command_to_json(*move)}} << '\n';
+      } else {
+        std::cout << "started: " << describe(Command{*move}) << '\n';
+      }
+      return static_cast<int>(kExitOk);
+    });
+  });
+}
+
+// --- home, stop ---------------------------------------------------------------------------
+
+void add_home(CLI::App& app, const GlobalOptions& g, int& exit_code) {
+  struct Options {
+    std::string motors;
+    uint32_t microstep = 0;
+    uint32_t delay_us = 0;
+    uint32_t max_steps = 0;
+    bool no_wait = false;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand("home", "home motors against their limit switch, one after another");
+  cmd->add_option("motor", o->motors, "1, 2 or all (the motors with switches)")->required();
+  cmd->add_option("--microstep", o->microstep, "microstep while seeking (default: keep the current one)");
+  cmd->add_option("--delay", o->delay_us, "us per step while seeking (default: the board's home_seek_us)");
+  cmd->add_option("--max-steps", o->max_steps, "give up after this many steps (default: no bound)");
+  cmd->add_flag("--no-wait", o->no_wait, "start homing one motor and return");
+  cmd->callback([&g, &exit_code, o] {
+    run_on_board(g, exit_code, [&](Session& s) {
+      std::vector<uint32_t> with_switches;
+      for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+        const bool has = s.version() ? ((s.version()->switch_mask >> (m - 1)) & 1u) != 0 : proto::motor_has_switches(m);
+        if (has) with_switches.push_back(m);
+      }
+      Result<std::vector<uint32_t>> motors = motors_of(o->motors, with_switches);
+      if (!motors) return usage_error(g, motors.error().message);
+      if (o->no_wait && motors->size() > 1) return usage_error(g, "--no-wait homes one motor: homing needs the others at rest");
+      int code = kExitOk;
+      // Homing needs every motor at rest (seed rule [2]): one after another.
+      for (const uint32_t m : *motors) {
+        SessionResult<BoardFrame> sent =
+            s.execute(StepperMove{m, proto::kActionHome, o->microstep, o->max_steps, o->delay_us});
+        if (!sent) return report_error(g, sent.error());
+        if (o->no_wait) {
+          if (!g.json) std::cout << "motor " << m << ": homing\n";
+          return code;
+        }
+        const int done = wait_and_report(g, s, {m}, Motion::kHome);
+        if (done != kExitOk && done != kExitIncomplete) return done;
+        if (done != kExitOk) code = done;
+      }
+      return code;
+    });
+  });
+}
+
+void add_stop(CLI::App& app, const GlobalOptions& g, int& exit_code) {
+  auto motors_text = std::make_shared<std::string>("all");
+  CLI::App* cmd = app.add_subcommand("stop", "stop motors (default: all)");
+  cmd->add_option("motor", *motors_text, "1-3 or all");
+  cmd->callback([&g, &exit_code, motors_text] {
+    run_on_board(g, exit_code, [&](Session& s) {
+      Result<std::vector<uint32_t>> motors = motors_of(*motors_text, {1, 2, 3});
+      if (!motors) return usage_error(g, motors.error().message);
+      if (motors->size() == proto::kMotorCount) {
+        if (SessionResult<Done> stopped = s.stop_all(); !stopped) return report_error(g, stopped.error());
+      } else {
+        SessionResult<BoardFrame> sent = s.execute(StepperMove{(*motors)[0], proto::kActionStop, 0, 0, 0});
+        if (!sent) return report_error(g, sent.error());
+      }
+      // A stop brakes when the motor ramps: report once it rests.
+      return wait_and_report(g, s, *motors, Motion::kStop) == kExitIo ? static_cast<int>(kExitIo) : static_cast<int>(kExitOk);
+    });
+  });
+}
+
+// --- servo, led ---------------------------------------------------------------------------
+
+void add_servo(CLI::App& app, const GlobalOptions& g, int& exit_code) {
+  auto move = std::make_shared<ServoMove>();
+  CLI::App* cmd = app.add_subcommand("servo", "turn a servo to an angle");
+  cmd->add_option("servo", move->servo, "1 (pan) or 2 (tilt)")->required();
+  cmd->add_option("angle", move->angle, "degrees, 0-180 (10-170 advised)")->required();
+  cmd->callback([&g, &exit_code, move] {
+    run_on_board(g, exit_code, [&](Session& s) {
+      for (const Warning& w : lint(Command{*move})) {
+        if (!g.json) std::cerr << "warning: " << w.message << '\n';
+      }
+      SessionResult<BoardFrame> sent = s.execute(*move);
+      if (!sent) return report_error(g, sent.error());
+      if (g.json) {
+        std::cout << nlohmann::json{{"servo", move->servo}, {"angle", move->angle},
+                                    {"pulse_us", proto::servo_pulse_us(move->angle)}}
+                  << '\n';
+      } else {
+        std::cout << describe(Command{*move}) << '\n';
+      }
+      return static_cast<int>(kExitOk);
+    });
+  });
+}
+
+// "#RRGGBB", "#RRGGBBWW" (the # optional), or "off".
+Result<LedColor> parse_colour(uint32_t strip, const std::string& text) {
+  if (text == "off") return LedColor{strip, 0, 0, 0, 0};
+  const std::string hex = !text.empty() && text[0] == '#' ? text.substr(1) : text;
+  if ((hex.size() != 6 && hex.size() != 8) || hex.find_first_not_of("0123456789abcdefABCDEF") != std::string::npos) {
+    return Error{"colour '" + text + "' is not #RRGGBB or #RRGGBBWW (hex), nor R G B W, nor off"};
+  }
+  const auto byte = [&](size_t i) { return static_cast<uint32_t>(std::stoul(hex.substr(2 * i, 2), nullptr, 16)); };
+  return LedColor{strip, byte(0), byte(1), byte(2), hex.size() == 8 ? byte(3) : 0};
+}
+
+void add_led(CLI::App& app, const GlobalOptions& g, int& exit_code) {
+  struct Options {
+    uint32_t strip = 1;
+    std::vector<std::string> colour;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand("led", "set an LED strip's colour: R G B W (0-255), #RRGGBB[WW], or off");
+  cmd->add_option("strip", o->strip, "1 or 2")->required();
+  cmd->add_option("colour", o->colour, "R G B W, or #RRGGBBWW, or off")->required();
+  cmd->callback([&g, &exit_code, o] {
+    run_on_board(g, exit_code, [&](Session& s) {
+      Result<LedColor> led = Error{"give the colour as R G B W (four numbers 0-255), #RRGGBB[WW], or off"};
+      if (o->colour.size() == 1) {
+        led = parse_colour(o->strip, o->colour[0]);
+      } else if (o->colour.size() == 4) {
+        std::vector<std::string> words{"LED", std::to_string(o->strip)};
+        words.insert(words.end(), o->colour.begin(), o->colour.end());
+        Result<Command, Diagnostic> command = command_from_words(words);
+        if (!command) return usage_error(g, command.error().message);
+        led = std::get<LedColor>(*command);
+      }
+      if (!led) return usage_error(g, led.error().message);
+      SessionResult<BoardFrame> sent = s.execute(*led);
+      if (!sent) return report_error(g, sent.error());
+      if (g.json) {
+        std::cout << command_to_json(Command{*led}) << '\n';
+      } else {
+        std::cout << describe(Command{*led}) << '\n';
+      }
+      return static_cast<int>(kExitOk);
+    });
+  });
+}
+
+// --- status, monitor ----------------------------------------------------------------------
+
+std::string switches_words(const MotorStatus& m) {
+  if (!proto::motor_has_switches(m.motor)) return "-";
+  std::string w;
+  if ((m.switches & 1u) != 0) w += "reverse ";
+  if ((m.switches & 2u) != 0) w += "forward ";
+  return w.empty() ? "open" : w.substr(0, w.size() - 1) + " pressed";
+}
+
+void print_status(const Session& s) {
+  const BoardModel& model = s.model();
+  if (s.firmware() == Firmware::kSeed) {
+    std::cout << "The seed firmware reports nothing: the board's state is unknown to a new session.\n";
+    return;
+  }
+  std::cout << "emergency switch: " << (model.board.emergency ? "PRESSED" : "released") << "\n\n";
+  std::cout << std::left << std::setw(7) << "motor" << std::setw(10) << "state" << std::setw(14) << "position"
+            << std::setw(14) << "target" << std::setw(11) << "microstep" << std::setw(9) << "rate" << std::setw(7)
+            << "homed" << "switches\n";
+  for (const MotorStatus& m : model.motors) {
+    std::cout << std::left << std::setw(7) << m.motor << std::setw(10) << motor_state_name(m.state) << std::setw(14)
+              << steps_text(m.position * m.microstep) << std::setw(14)
+              << (m.endless ? std::string("(run)") : steps_text(m.target * m.microstep))
+              << std::setw(11) << ("1/" + std::to_string(m.microstep)) << std::setw(9) << m.rate << std::setw(7)
+              << (m.homed ? "yes" : "no") << switches_words(m) << '\n';
+  }
+  std::cout << "(positions in steps of the motor's microstep, as `hmc move` counts them; rate in steps/s)\n\n";
+  const auto servo = [](uint32_t us) { return us == 0 ? std::string("released") : std::to_string(us) + " us"; };
+  std::cout << "servo 1 (pan): " << servo(model.board.servo1_us) << "   servo 2 (tilt): " << servo(model.board.servo2_us)
+            << '\n';
+  for (const StripStatus& l : model.strips) {
+    std::ostringstream hex;
+    hex << '#' << std::hex << std::setfill('0') << std::setw(2) << l.r << std::setw(2) << l.g << std::setw(2) << l.b
+        << std::setw(2) << l.w;
+    std::cout << "strip " << l.strip << ": " << hex.str() << " (r " << l.r << ", g " << l.g << ", b " << l.b << ", w "
+              << l.w << ")\n";
+  }
+}
+
+void add_status(CLI::App& app, const GlobalOptions& g, int& exit_code) {
+  CLI::App* cmd = app.add_subcommand("status", "the board's state: motors, switches, servos, LED strips");
+  cmd->callback([&g, &exit_code] {
+    run_on_board(g, exit_code, [&](Session& s) {
+      if (g.json) {
+        std::cout << model_to_json(s).dump(2) << '\n';
+      } else {
+        print_status(s);
+      }
+      return static_cast<int>(kExitOk);
+    });
+  });
+}
+
+void add_monitor(CLI::App& app, const GlobalOptions& g, int& exit_code) {
+  auto seconds = std::make_shared<double>(0);
+  CLI::App* cmd = app.add_subcommand("monitor", "show every reply and event the board sends, decoded, with times");
+  cmd->add_option("--duration", *seconds, "stop after this many seconds (default: until Ctrl-C)")
+      ->check(CLI::PositiveNumber);
+  cmd->callback([&g, &exit_code, seconds] {
+    // Lines are shown as the session reads them, from when it is open (not its own queries).
+    auto started = std::make_shared<Clock::time_point>();
+    auto showing = std::make_shared<bool>(false);
+    const LineHandler show = [&g, started, showing](std::string_view line, const Result<BoardFrame, Diagnostic>& frame) {
+      if (!*showing) return;
+      const double t = std::chrono::duration<double>(Clock::now() - *started).count();
+      if (g.json) {
+        nlohmann::json j{{"t", std::round(t * 1e6) / 1e6}, {"line", std::string(line)}};
+        j["frame"] = frame ? board_frame_to_json(*frame) : nlohmann::json(nullptr);
+        if (!frame) j["error"] = diagnostic_to_json(frame.error());
+        std::cout << j << std::endl;
+        return;
+      }
+      std::cout << std::fixed << std::setprecision(3) << "+" << t << " s  ";
+      if (frame) {
+        std::cout << board_frame_spec(*frame).name << ' ' << (is_event(*frame) ? "event" : "reply") << ": "
+                  << describe(*frame) << std::endl;
+      } else {
+        std::cout << "not a frame: " << line << " (" << frame.error().message << ")" << std::endl;
+      }
+    };
+    std::unique_ptr<Session> s = connect(g, exit_code, show);
+    if (!s) return;
+    if (s->firmware() == Firmware::kSeed && !g.json) std::cerr << "note: the seed firmware sends nothing\n";
+    if (!g.json) std::cerr << "listening" << (*seconds > 0 ? "" : " until Ctrl-C") << "...\n";
+    *started = Clock::now();
+    *showing = true;
+    const auto duration = *seconds > 0 ? Millis{static_cast<int64_t>(*seconds * 1000)} : Millis{int64_t{1} << 40};
+    if (SessionResult<Done> listened = s->listen(duration); !listened) exit_code = report_error(g, listened.error());
+  });
+}
+
+}  // namespace
+
+void add_board_commands(CLI::App& app, const GlobalOptions& global, int& exit_code) {
+  add_send(app, global, exit_code);
+  add_move(app, global, exit_code);
+  add_home(app, global, exit_code);
+  add_stop(app, global, exit_code);
+  add_servo(app, global, exit_code);
+  add_led(app, global, exit_code);
+  add_status(app, global, exit_code);
+  add_monitor(app, global, exit_code);
+}
+
+}  // namespace hmc::cli

@@ -1,0 +1,171 @@
+// Session: a conversation with one board over a Transport, and what the host knows of the board.
+//
+// open() asks `VER` and so learns whether the board runs our firmware (protocol v2: it answers
+// every line and reports events) or the seed's, which answers nothing. With v2 the model of the
+// board (each motor's state, position, target, microstep, rate; switches; servos; strips;
+// emergency stop) comes from the board's replies and events; with the seed firmware it comes
+// from what this session sent and the time each move must take.
+//
+// Every command is checked before it is sent — the protocol's ranges, then the board's rules
+// against the model (a move toward a pressed switch, homing while a motor moves, anything but
+// stop and LED while the emergency switch is pressed, servo and LED while a stepper runs under
+// the seed's rules) — and a refusal, the host's or the board's, is explained in words. Replies
+// are awaited with a timeout, and silence from a board that answered before is an error.
+//
+// A session never leaves a motor running because the host gave up: when the interrupt callback
+// fires (Ctrl-C) or the link fails while it waits for a motion, it sends a stop to every motor.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "hmc/board_frame.h"
+#include "hmc/command.h"
+#include "hmc/line_splitter.h"
+#include "hmc/result.h"
+#include "hmc/transport.h"
+
+namespace hmc {
+
+using Clock = std::chrono::steady_clock;
+using Millis = std::chrono::milliseconds;
+
+enum class Firmware : uint8_t { kV2, kSeed };
+
+// Which firmware to expect: detect it with VER, or take it as given (skips the query).
+enum class FirmwareChoice : uint8_t { kDetect, kV2, kSeed };
+
+struct SessionError {
+  enum class Kind : uint8_t {
+    kInvalid,      // the command breaks the protocol's ranges (the codec's verdict)
+    kRefused,      // the host refused it: the board's rules, judged on the model
+    kNak,          // the board refused it
+    kNoReply,      // the board stopped answering
+    kLink,         // the port failed or the connection was lost
+    kInterrupted,  // interrupted (Ctrl-C); every motor was sent a stop
+  };
+  Kind kind = Kind::kLink;
+  std::string message;                        // in words, with what to do
+  proto::Reason reason = proto::Reason::kOk;  // kInvalid, kRefused, kNak
+};
+
+template <typename T>
+using SessionResult = Result<T, SessionError>;
+
+// What the host knows of the board.
+struct BoardModel {
+  std::array<MotorStatus, proto::kMotorCount> motors{};
+  BoardStatus board{};
+  std::array<StripStatus, proto::kStripCount> strips{};
+  // v2: everything above came from the board. Seed: positions count from where this session
+  // started, the rest is what it sent.
+  bool reported = false;
+  // How each motor's last motion ended (v2: from EVD), until the next one starts.
+  std::array<std::optional<MotionEnd>, proto::kMotorCount> last_end{};
+
+  BoardModel();
+  const MotorStatus& motor(uint32_t m) const { return motors[m - 1]; }
+  MotorStatus& motor(uint32_t m) { return motors[m - 1]; }
+  bool any_moving() const;
+};
+
+struct SessionOptions {
+  FirmwareChoice firmware = FirmwareChoice::kDetect;
+  Millis reply_timeout{1000};  // longest wait for one reply
+  // Polled while waiting; returning true interrupts the wait and stops every motor.
+  std::function<bool()> interrupted;
+  // Every line the board sends, decoded or not, as it arrives (monitor, --verbose).
+  std::function<void(std::string_view line, const Result<BoardFrame, Diagnostic>& frame)> on_line;
+  // Every line the host sends, as sent (--verbose).
+  std::function<void(std::string_view line)> on_send;
+};
+
+class Session {
+ public:
+  // Connects over an open transport and learns which firmware the board runs; with v2 it also
+  // reads the board's state (STA for every unit).
+  static SessionResult<std::unique_ptr<Session>> open(std::unique_ptr<Transport> transport,
+                                                      const SessionOptions& options);
+
+  Firmware firmware() const { return firmware_; }
+  // The board's VER answer (v2 only).
+  const std::optional<Version>& version() const { return version_; }
+  const BoardModel& model() const { return model_; }
+  Transport& transport() { return *transport_; }
+  // "simulated board sim://default (real time), firmware 1.0.0, protocol 2" and the like.
+  std::string description() const;
+  // The rate budget of the board in steps/s (VER; the seed's figure is unknown, ours is used).
+  uint32_t max_rate() const;
+  bool legacy_rules() const;
+
+  // Checks a command against the protocol and the model without sending it.
+  SessionResult<Done> check(const Command& command) const;
+  // Checks, sends, and (v2) waits for the reply: Ack, or the query's answer. A refusal is an
+  // error of kind kNak, explained. Seed firmware: returns Ack once the line is sent.
+  SessionResult<BoardFrame> execute(const Command& command);
+  // Sends one line as given (a line end added when it has none) and waits for its reply (v2).
+  // The host checks nothing: this is how a refusal by the board is tested.
+  SessionResult<BoardFrame> send_line(std::string_view line);
+  // Reads the board's state again (v2; a no-op for the seed).
+  SessionResult<Done> refresh();
+  // Waits until every motor in `motors` rests: v2 from its events, checking with STA during a
+  // silence; seed from the time its move must take. nullopt limit: as long as they move.
+  SessionResult<Done> wait_until_idle(const std::vector<uint32_t>& motors, std::optional<Millis> limit = {});
+  // Sends a stop to every motor (and, v2, waits for the replies).
+  SessionResult<Done> stop_all();
+  // Reads and handles what the board sends for `duration`, or until interrupted.
+  SessionResult<Done> listen(Millis duration);
+
+ private:
+  Session(std::unique_ptr<Transport> transport, const SessionOptions& options);
+  SessionResult<Done> detect();
+  SessionResult<Done> detect_firmware();
+  // Sends a line; `command` is what it carries, applied to the model once accepted.
+  SessionResult<Done> write_line(const std::string& line, std::optional<Command> command);
+  // The next reply (non-event frame), handling events on the way.
+  SessionResult<BoardFrame> await_reply(std::string_view sent);
+  // Reads for at most `timeout`; returns frames decoded in that time (events handled).
+  SessionResult<std::vector<BoardFrame>> pump(Millis timeout);
+  void apply(const BoardFrame& frame);
+  void apply_sent(const Command& command);
+  void settle_seed_motions();
+  bool interrupted() const { return options_.interrupted && options_.interrupted(); }
+  SessionError interrupted_error();
+  SessionError link_error(const std::string& message);
+
+  // Seed firmware: the move each motor was last sent, timed from when it was sent.
+  struct SeedMove {
+    Clock::time_point start, end;
+    int64_t delay_us = 1;
+    int64_t sign = 1;
+  };
+
+  std::unique_ptr<Transport> transport_;
+  SessionOptions options_;
+  std::array<SeedMove, proto::kMotorCount> seed_moves_{};
+  Firmware firmware_ = Firmware::kV2;
+  std::optional<Version> version_;
+  proto::ChecksumMode mode_ = proto::ChecksumMode::kSum;
+  BoardModel model_;
+  LineSplitter splitter_;
+  std::deque<std::optional<Command>> in_flight_;  // lines sent, oldest first, awaiting replies
+  std::vector<BoardFrame> pending_replies_;       // replies read, not yet taken
+  bool rebooted_ = false;                     // EVB seen since the last wait began
+  bool detecting_ = false;                    // open(): the board's checksum mode is not known yet
+};
+
+// The board's refusal in words, with what to do: "motor 1's switch at the forward end is pressed:
+// move it the other way (or home it)".
+std::string explain_refusal(proto::Reason reason, const Command* command, const BoardModel& model);
+
+// A motor's position in full steps, for people: 819200 (1/256 step) -> "3200", 64 -> "0.25".
+std::string steps_text(int64_t position);
+
+}  // namespace hmc

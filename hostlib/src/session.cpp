@@ -1,0 +1,556 @@
+// Session: firmware detection, the board model, checks before sending, replies and waits.
+#include "hmc/session.h"
+
+#include <algorithm>
+
+#include "hmc/codec.h"
+
+namespace hmc {
+namespace {
+
+using proto::Reason;
+
+// No reply to VER within this long means a board that answers nothing: the seed firmware.
+// It covers the line's wire time at 9600 baud and a network bridge's delay.
+constexpr Millis kDetectTimeout{250};
+// Longest single read while waiting, so interrupts and deadlines are seen promptly.
+constexpr Millis kSlice{50};
+// While a motion runs and the board says nothing for this long, ask it (an event may be lost).
+constexpr Millis kStatusEvery{500};
+// Seed firmware: a move's time is known only from its steps and delay; the board's clock may
+// run a little slow, and the line takes its time to arrive.
+constexpr double kSeedTimeMargin = 1.02;
+constexpr Millis kSeedTimeSlack{30};
+// Seed firmware: how long the host assumes a homing without a step bound may take.
+constexpr Millis kSeedHomingTime{20000};
+
+constexpr int64_t kUnitsPerStep = 256;  // positions count 1/256 step
+
+const char* end_name(uint32_t end) { return end == 0 ? "reverse" : "forward"; }
+
+std::string motor_name(uint32_t m) { return "motor " + std::to_string(m); }
+
+SessionError make_error(SessionError::Kind kind, std::string message, Reason reason = Reason::kOk) {
+  SessionError e;
+  e.kind = kind;
+  e.message = std::move(message);
+  e.reason = reason;
+  return e;
+}
+
+Clock::duration seed_duration(uint64_t steps, uint32_t delay_us) {
+  const auto us = static_cast<double>(steps) * delay_us * kSeedTimeMargin;
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::micro>(us)) +
+         kSeedTimeSlack;
+}
+
+}  // namespace
+
+BoardModel::BoardModel() {
+  for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+    motor(m).motor = m;
+    motor(m).microstep = 16;  // the board's microstep after power-up
+  }
+  for (uint32_t s = 1; s <= proto::kStripCount; ++s) strips[s - 1].strip = s;
+  board.servo1_us = board.servo2_us = proto::servo_pulse_us(90);
+}
+
+bool BoardModel::any_moving() const {
+  return std::any_of(motors.begin(), motors.end(), [](const MotorStatus& m) { return m.state != MotorState::kIdle; });
+}
+
+std::string steps_text(int64_t position) {
+  const bool negative = position < 0;
+  const uint64_t magnitude = negative ? uint64_t(0) - static_cast<uint64_t>(position) : static_cast<uint64_t>(position);
+  std::string text = (negative ? "-" : "") + std::to_string(magnitude / kUnitsPerStep);
+  uint64_t rest = magnitude % kUnitsPerStep;
+  if (rest != 0) {
+    // 1/256 has an exact decimal expansion of at most 8 digits.
+    std::string digits;
+    for (int i = 0; i < 8 && rest != 0; ++i) {
+      rest *= 10;
+      digits += static_cast<char>('0' + rest / kUnitsPerStep);
+      rest %= kUnitsPerStep;
+    }
+    text += "." + digits;
+  }
+  return text;
+}
+
+std::string explain_refusal(Reason reason, const Command* command, const BoardModel& model) {
+  const StepperMove* move = command != nullptr ? std::get_if<StepperMove>(command) : nullptr;
+  switch (reason) {
+    case Reason::kLimitPressed:
+      if (move != nullptr) {
+        const uint32_t end = move->dir == proto::kActionForward ? 1 : 0;
+        return motor_name(move->motor) + "'s limit switch at the " + end_name(end) +
+               " end is pressed: move it the other way first (or home it)";
+      }
+      return "a limit switch in the direction of the move is pressed";
+    case Reason::kMotorsRunning: {
+      std::string moving;
+      for (const MotorStatus& m : model.motors) {
+        if (m.state != MotorState::kIdle) moving += (moving.empty() ? "" : ", ") + motor_name(m.motor);
+      }
+      return "homing needs every motor at rest" + (moving.empty() ? std::string() : ", but " + moving + " moves") +
+             ": wait for it, or stop it with `hmc stop`";
+    }
+    case Reason::kEmergencyStop:
+      return "the emergency switch is pressed: release it first (stop and LED commands still work)";
+    case Reason::kBusy:
+      return "the board keeps the seed's rule: servo and LED commands are ignored while a stepper runs; wait "
+             "until it stops (`hmc move ... --wait`)";
+    case Reason::kRateLimit:
+      return "the moving motors together would step faster than the board can time (its budget is the sum of "
+             "their rates): use a longer delay, or wait for the other motors";
+    case Reason::kSoftLimit:
+      return (move != nullptr ? motor_name(move->motor) + "'s" : std::string("the motor's")) +
+             " move would end outside its soft travel limits (LIM)";
+    case Reason::kNoSwitch:
+      return (move != nullptr ? motor_name(move->motor) : std::string("this motor")) +
+             " has no limit switch to home against";
+    default:
+      return std::string("the board refused the line: ") + proto::reason_spec(reason).text;
+  }
+}
+
+Session::Session(std::unique_ptr<Transport> transport, const SessionOptions& options)
+    : transport_(std::move(transport)), options_(options) {}
+
+SessionResult<std::unique_ptr<Session>> Session::open(std::unique_ptr<Transport> transport,
+                                                       const SessionOptions& options) {
+  std::unique_ptr<Session> session(new Session(std::move(transport), options));
+  if (options.firmware == FirmwareChoice::kSeed) {
+    session->firmware_ = Firmware::kSeed;
+    return session;
+  }
+  if (SessionResult<Done> detected = session->detect(); !detected) return detected.error();
+  if (session->firmware_ == Firmware::kSeed && options.firmware == FirmwareChoice::kV2) {
+    return make_error(SessionError::Kind::kNoReply,
+                      "no reply to VER from " + session->transport_->description() +
+                          " within " + std::to_string(kDetectTimeout.count()) +
+                          " ms: is the board powered, connected and at this baud rate?");
+  }
+  if (SessionResult<Done> refreshed = session->refresh(); !refreshed) return refreshed.error();
+  return session;
+}
+
+SessionResult<Done> Session::detect() {
+  // Whatever an earlier program left unread is not an answer to this session.
+  if (SessionResult<std::vector<BoardFrame>> drained = pump(Millis{20}); !drained) return drained.error();
+  pending_replies_.clear();
+
+  detecting_ = true;
+  const SessionResult<Done> result = detect_firmware();
+  detecting_ = false;
+  return result;
+}
+
+SessionResult<Done> Session::detect_firmware() {
+  // The first VER goes out with the seed's sum; a board in CRC-16 mode refuses it, in CRC-16,
+  // and the second VER uses the mode its answer came in.
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    const Result<std::string, Diagnostic> frame = encode(VersionQuery{}, mode_);
+    if (SessionResult<Done> sent = write_line(frame.value(), std::nullopt); !sent) return sent.error();
+    const Clock::time_point deadline = Clock::now() + kDetectTimeout;
+    while (pending_replies_.empty() && Clock::now() < deadline) {
+      const auto left = std::chrono::duration_cast<Millis>(deadline - Clock::now());
+      if (SessionResult<std::vector<BoardFrame>> got = pump(std::min(left + Millis{1}, kSlice)); !got) {
+        return got.error();
+      }
+      if (interrupted()) return interrupted_error();
+    }
+    if (pending_replies_.empty()) {
+      if (attempt > 0) break;
+      in_flight_.clear();
+      firmware_ = Firmware::kSeed;
+      mode_ = proto::ChecksumMode::kSum;
+      return Done{};
+    }
+    const BoardFrame reply = pending_replies_.front();
+    pending_replies_.erase(pending_replies_.begin());
+    if (const Version* v = std::get_if<Version>(&reply)) {
+      firmware_ = Firmware::kV2;
+      version_ = *v;
+      mode_ = v->checksum_mode;
+      return Done{};
+    }
+    if (!std::holds_alternative<Nak>(reply) || mode_ == proto::ChecksumMode::kSum) break;
+  }
+  return make_error(SessionError::Kind::kNoReply,
+                    "the board at " + transport_->description() + " did not answer VER as expected");
+}
+
+std::string Session::description() const {
+  std::string text = transport_->description();
+  if (firmware_ == Firmware::kSeed) return text + ", seed firmware (it sends no replies)";
+  if (version_) {
+    text += ", firmware " + firmware_version_text(version_->firmware) + ", protocol " +
+            std::to_string(version_->protocol);
+    if (version_->legacy) text += ", legacy rules";
+  }
+  return text;
+}
+
+uint32_t Session::max_rate() const { return version_ ? version_->max_rate : 50000; }
+
+bool Session::legacy_rules() const { return firmware_ == Firmware::kSeed || (version_ && version_->legacy); }
+
+SessionResult<Done> Session::write_line(const std::string& line, std::optional<Command> command) {
+  if (options_.on_send) options_.on_send(line);
+  if (Status written = transport_->write(line + "\n"); !written) return link_error(written.error().message);
+  if (firmware_ == Firmware::kSeed) {
+    if (command) apply_sent(*command);
+  } else if (!is_blank(line)) {
+    in_flight_.push_back(std::move(command));
+  }
+  return Done{};
+}
+
+SessionResult<std::vector<BoardFrame>> Session::pump(Millis timeout) {
+  Result<std::string> bytes = transport_->read(timeout);
+  if (!bytes) return link_error(bytes.error().message);
+  splitter_.feed(*bytes);
+  std::vector<BoardFrame> frames;
+  while (std::optional<Line> line = splitter_.next()) {
+    Result<BoardFrame, Diagnostic> frame = decode_board_frame(line->text, mode_);
+    if (!frame && detecting_) {
+      // A board left in the other checksum mode by an earlier program answers in that mode.
+      const proto::ChecksumMode other =
+          mode_ == proto::ChecksumMode::kSum ? proto::ChecksumMode::kCrc16 : proto::ChecksumMode::kSum;
+      if (Result<BoardFrame, Diagnostic> retry = decode_board_frame(line->text, other); retry) {
+        mode_ = other;
+        frame = std::move(retry);
+      }
+    }
+    if (options_.on_line) options_.on_line(line->text, frame);
+    if (!frame) {
+      // Counting replies is only possible if every line is read: a garbled one ends the session.
+      return make_error(SessionError::Kind::kLink,
+                        "the board sent a line that is not a frame (" + frame.error().message + "): '" +
+                            line->text + "'; is the baud rate right (--baud)?");
+    }
+    apply(*frame);
+    if (!is_event(*frame)) {
+      // The reply to the oldest line in flight: an accepted command changes the model now,
+      // before any event that follows it in the stream.
+      if (!in_flight_.empty()) {
+        if (in_flight_.front() && std::holds_alternative<Ack>(*frame)) apply_sent(*in_flight_.front());
+        in_flight_.pop_front();
+      }
+      pending_replies_.push_back(*frame);
+    }
+    frames.push_back(std::move(*frame));
+  }
+  return frames;
+}
+
+SessionResult<BoardFrame> Session::await_reply(std::string_view sent) {
+  const Clock::time_point deadline = Clock::now() + options_.reply_timeout;
+  while (pending_replies_.empty()) {
+    if (Clock::now() >= deadline) {
+      return make_error(SessionError::Kind::kNoReply,
+                        "no reply from the board within " + std::to_string(options_.reply_timeout.count()) +
+                            " ms to " + std::string(sent) + " (it answered before: is it still powered and connected?)");
+    }
+    const auto left = std::chrono::duration_cast<Millis>(deadline - Clock::now());
+    if (SessionResult<std::vector<BoardFrame>> got = pump(std::min(left + Millis{1}, kSlice)); !got) return got.error();
+  }
+  BoardFrame reply = pending_replies_.front();
+  pending_replies_.erase(pending_replies_.begin());
+  return reply;
+}
+
+SessionResult<Done> Session::check(const Command& command) const {
+  if (Result<Command, Diagnostic> valid = validate(command); !valid) {
+    return make_error(SessionError::Kind::kInvalid, valid.error().message, valid.error().reason);
+  }
+  const auto refuse = [&](Reason reason) {
+    return make_error(SessionError::Kind::kRefused, explain_refusal(reason, &command, model_), reason);
+  };
+  const bool know_switches = firmware_ == Firmware::kV2;
+  if (const auto* move = std::get_if<StepperMove>(&command)) {
+    const MotorStatus& motor = model_.motor(move->motor);
+    if (move->dir == proto::kActionForward || move->dir == proto::kActionReverse) {
+      if (know_switches && model_.board.emergency) return refuse(Reason::kEmergencyStop);
+      const uint32_t end = move->dir == proto::kActionForward ? 1 : 0;
+      if (know_switches && ((motor.switches >> end) & 1u) != 0) return refuse(Reason::kLimitPressed);
+    } else if (move->dir == proto::kActionHome) {
+      if (know_switches && model_.board.emergency) return refuse(Reason::kEmergencyStop);
+      if (model_.any_moving()) return refuse(Reason::kMotorsRunning);
+    }
+  } else if (std::holds_alternative<ServoMove>(command)) {
+    if (know_switches && model_.board.emergency) return refuse(Reason::kEmergencyStop);
+    if (legacy_rules() && model_.any_moving()) return refuse(Reason::kBusy);
+  } else if (std::holds_alternative<LedColor>(command)) {
+    if (legacy_rules() && model_.any_moving()) return refuse(Reason::kBusy);
+  } else if (firmware_ == Firmware::kSeed && command_id(command) > proto::CommandId::kLed) {
+    return make_error(SessionError::Kind::kRefused,
+                      std::string(command_spec(command).name) + " is a protocol v2 command: the seed firmware does not know it",
+                      Reason::kUnknownCommand);
+  }
+  return Done{};
+}
+
+SessionResult<BoardFrame> Session::execute(const Command& command) {
+  settle_seed_motions();
+  if (SessionResult<Done> ok = check(command); !ok) return ok.error();
+  const Result<std::string, Diagnostic> frame = encode(command, mode_);
+  if (SessionResult<Done> sent = write_line(frame.value(), command); !sent) return sent.error();
+  if (firmware_ == Firmware::kSeed) return BoardFrame{Ack{}};
+  SessionResult<BoardFrame> reply = await_reply(frame.value());
+  if (!reply) return reply;
+  if (const Nak* nak = std::get_if<Nak>(&reply.value())) {
+    return make_error(SessionError::Kind::kNak, explain_refusal(nak->reason, &command, model_), nak->reason);
+  }
+  return reply;
+}
+
+SessionResult<BoardFrame> Session::send_line(std::string_view line) {
+  settle_seed_motions();
+  std::string text(line);
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\r')) text.pop_back();
+  const Result<Decoded, Diagnostic> decoded = decode(text, mode_);
+  std::optional<Command> command;
+  if (decoded) command = decoded->command;
+  if (SessionResult<Done> sent = write_line(text, command); !sent) return sent.error();
+  if (firmware_ == Firmware::kSeed) return BoardFrame{Ack{}};
+  if (is_blank(text)) return BoardFrame{Ack{}};  // a blank line gets no reply
+  SessionResult<BoardFrame> reply = await_reply(text);
+  if (!reply) return reply;
+  if (const Nak* nak = std::get_if<Nak>(&reply.value())) {
+    return make_error(SessionError::Kind::kNak,
+                      explain_refusal(nak->reason, decoded ? &decoded->command : nullptr, model_) + " (token " +
+                          std::to_string(nak->token) + ", byte " + std::to_string(nak->offset) + ")",
+                      nak->reason);
+  }
+  return reply;
+}
+
+SessionResult<Done> Session::refresh() {
+  if (firmware_ == Firmware::kSeed) return Done{};
+  for (uint32_t unit = 1; unit <= proto::kUnitFirstStrip + proto::kStripCount - 1; ++unit) {
+    SessionResult<BoardFrame> reply = execute(StatusQuery{unit});
+    if (!reply) return reply.error();
+  }
+  model_.reported = true;
+  return Done{};
+}
+
+SessionResult<Done> Session::wait_until_idle(const std::vector<uint32_t>& motors, std::optional<Millis> limit) {
+  const Clock::time_point start = Clock::now();
+  const auto waiting = [&] {
+    settle_seed_motions();
+    return std::any_of(motors.begin(), motors.end(),
+                       [&](uint32_t m) { return model_.motor(m).state != MotorState::kIdle; });
+  };
+  rebooted_ = false;
+  Clock::time_point last_heard = Clock::now();
+  while (waiting()) {
+    if (interrupted()) return interrupted_error();
+    if (limit && Clock::now() - start > *limit) {
+      SessionError e = make_error(SessionError::Kind::kNoReply,
+                                  "the motion did not end within " + std::to_string(limit->count()) + " ms");
+      (void)stop_all();
+      e.message += "; every motor was sent a stop";
+      return e;
+    }
+    // Seed firmware: nothing will arrive, but reading notices a link that fails.
+    SessionResult<std::vector<BoardFrame>> frames = pump(kSlice);
+    if (!frames) {
+      SessionError e = frames.error();
+      (void)stop_all();  // the link may be gone, but if it is not, nothing keeps moving
+      return e;
+    }
+    if (rebooted_) {
+      return make_error(SessionError::Kind::kLink,
+                        "the board restarted during the motion (power or reset): its positions are lost");
+    }
+    if (!frames->empty()) last_heard = Clock::now();
+    if (firmware_ == Firmware::kV2 && Clock::now() - last_heard >= kStatusEvery) {
+      for (const uint32_t m : motors) {
+        if (SessionResult<BoardFrame> status = execute(StatusQuery{m}); !status) {
+          SessionError e = status.error();
+          (void)stop_all();
+          return e;
+        }
+      }
+      last_heard = Clock::now();
+    }
+  }
+  return Done{};
+}
+
+SessionResult<Done> Session::stop_all() {
+  // Stops go out first, all of them, then the replies are read: the motors halt together.
+  std::vector<std::string> sent;
+  for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+    const StepperMove stop{m, proto::kActionStop, 0, 0, 0};
+    const std::string frame = encode(stop, mode_).value();
+    if (SessionResult<Done> written = write_line(frame, Command{stop}); !written) return written.error();
+    sent.push_back(frame);
+  }
+  for (uint32_t m = 1; m <= proto::kMotorCount && firmware_ == Firmware::kV2; ++m) {
+    SessionResult<BoardFrame> reply = await_reply(sent[m - 1]);
+    if (!reply) return reply.error();
+  }
+  if (firmware_ == Firmware::kV2) {
+    // The motors' final positions arrive as events right after the replies.
+    for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+      if (SessionResult<BoardFrame> status = execute(StatusQuery{m}); !status) return status.error();
+    }
+  }
+  return Done{};
+}
+
+SessionResult<Done> Session::listen(Millis duration) {
+  const Clock::time_point deadline = Clock::now() + duration;
+  while (Clock::now() < deadline && !interrupted()) {
+    const auto left = std::chrono::duration_cast<Millis>(deadline - Clock::now());
+    if (SessionResult<std::vector<BoardFrame>> got = pump(std::min(left + Millis{1}, kSlice)); !got) {
+      return got.error();
+    }
+    pending_replies_.clear();  // nothing was asked: replies here belong to nobody
+  }
+  return Done{};
+}
+
+SessionError Session::interrupted_error() {
+  SessionError e = make_error(SessionError::Kind::kInterrupted, "interrupted");
+  // The flag stays raised: stop_all must not look at it, and does not.
+  if (SessionResult<Done> stopped = stop_all(); !stopped) {
+    e.message += "; sending stop to every motor failed: " + stopped.error().message;
+  } else {
+    e.message += "; every motor was sent a stop";
+  }
+  return e;
+}
+
+SessionError Session::link_error(const std::string& message) {
+  return make_error(SessionError::Kind::kLink, message);
+}
+
+void Session::apply(const BoardFrame& frame) {
+  struct Apply {
+    Session& s;
+    void operator()(const Ack&) const {}
+    void operator()(const Nak&) const {}
+    void operator()(const Version& v) const { s.version_ = v; }
+    void operator()(const MotorStatus& m) const {
+      if (m.motor >= 1 && m.motor <= proto::kMotorCount) s.model_.motor(m.motor) = m;
+    }
+    void operator()(const BoardStatus& b) const { s.model_.board = b; }
+    void operator()(const StripStatus& l) const {
+      if (l.strip >= 1 && l.strip <= proto::kStripCount) s.model_.strips[l.strip - 1] = l;
+    }
+    void operator()(const SettingValue&) const {}
+    void operator()(const Booted&) const {
+      s.rebooted_ = true;
+      s.mode_ = proto::ChecksumMode::kSum;
+      s.model_ = BoardModel{};
+    }
+    void operator()(const MotionEnded& e) const {
+      if (e.motor < 1 || e.motor > proto::kMotorCount) return;
+      MotorStatus& m = s.model_.motor(e.motor);
+      m.state = MotorState::kIdle;
+      m.position = e.position;
+      m.rate = 0;
+      m.endless = false;
+      s.model_.last_end[e.motor - 1] = e.how;
+    }
+    void operator()(const HomingEnded& e) const {
+      if (e.motor < 1 || e.motor > proto::kMotorCount) return;
+      MotorStatus& m = s.model_.motor(e.motor);
+      m.state = MotorState::kIdle;
+      m.position = e.position;
+      m.target = e.position;
+      m.homed = e.homed;
+      m.rate = 0;
+    }
+    void operator()(const LimitChanged& e) const {
+      if (e.motor < 1 || e.motor > proto::kMotorCount || e.end > 1) return;
+      const uint32_t board_bit = 1u << (2 * (e.motor - 1) + e.end);
+      const uint32_t motor_bit = 1u << e.end;
+      uint32_t& limits = s.model_.board.limits;
+      uint32_t& switches = s.model_.motor(e.motor).switches;
+      limits = e.pressed ? (limits | board_bit) : (limits & ~board_bit);
+      switches = e.pressed ? (switches | motor_bit) : (switches & ~motor_bit);
+    }
+    void operator()(const EmergencyChanged& e) const { s.model_.board.emergency = e.pressed; }
+    void operator()(const DriverFault&) const {}
+  };
+  std::visit(Apply{*this}, frame);
+}
+
+void Session::apply_sent(const Command& command) {
+  if (const auto* c = std::get_if<ChecksumModeCommand>(&command)) {
+    mode_ = static_cast<proto::ChecksumMode>(c->mode);
+    if (version_) version_->checksum_mode = mode_;
+  } else if (const auto* servo = std::get_if<ServoMove>(&command)) {
+    (servo->servo == 1 ? model_.board.servo1_us : model_.board.servo2_us) = proto::servo_pulse_us(servo->angle);
+  } else if (const auto* led = std::get_if<LedColor>(&command)) {
+    model_.strips[led->strip - 1] = StripStatus{led->strip, led->r, led->g, led->b, led->w};
+  }
+  const auto* move = std::get_if<StepperMove>(&command);
+  if (move == nullptr) return;
+  MotorStatus& m = model_.motor(move->motor);
+  const Clock::time_point now = Clock::now();
+  if (firmware_ == Firmware::kV2) {
+    // Events and status replies keep the rest current; the state changes now so a wait that
+    // follows at once does not see the motor idle before the board's first event.
+    if (move->dir == proto::kActionStop) return;
+    if (move->microstep != 0) m.microstep = move->microstep;
+    m.state = move->dir == proto::kActionHome ? MotorState::kHoming : MotorState::kMoving;
+    model_.last_end[move->motor - 1].reset();
+    return;
+  }
+  // Seed firmware: the model is all the host has. A new command replaces the running one, so
+  // the steps the old one made until now count.
+  SeedMove& seed = seed_moves_[move->motor - 1];
+  if (m.state == MotorState::kMoving && now < seed.end) {
+    const auto elapsed = std::chrono::duration_cast<std::chrono::microseconds>(now - seed.start).count();
+    const int64_t units = std::max<int64_t>(0, elapsed) / seed.delay_us * kUnitsPerStep / m.microstep;
+    const int64_t left = m.target - m.position;
+    m.position += m.endless ? seed.sign * units : (left >= 0 ? std::min(units, left) : std::max(-units, left));
+  }
+  m.state = MotorState::kIdle;
+  m.rate = 0;
+  m.target = m.position;
+  m.endless = false;
+  seed = SeedMove{now, now, 1, 1};
+  if (move->dir == proto::kActionStop) return;
+  if (move->microstep != 0) m.microstep = move->microstep;
+  m.rate = 1000000u / std::max<uint32_t>(move->delay_us, 1);
+  seed.delay_us = std::max<uint32_t>(move->delay_us, 1);
+  if (move->dir == proto::kActionHome) {
+    m.state = MotorState::kHoming;
+    seed.end = move->steps > 0 ? now + seed_duration(move->steps, move->delay_us) : now + kSeedHomingTime;
+    return;
+  }
+  const int64_t units = static_cast<int64_t>(move->steps) * kUnitsPerStep / m.microstep;
+  seed.sign = move->dir == proto::kActionForward ? 1 : -1;
+  m.state = MotorState::kMoving;
+  m.endless = move->steps == 0;
+  m.target = m.endless ? m.position : m.position + seed.sign * units;
+  seed.end = m.endless ? Clock::time_point::max() : now + seed_duration(move->steps, move->delay_us);
+}
+
+void Session::settle_seed_motions() {
+  if (firmware_ != Firmware::kSeed) return;
+  const Clock::time_point now = Clock::now();
+  for (uint32_t i = 0; i < proto::kMotorCount; ++i) {
+    MotorStatus& m = model_.motors[i];
+    if (m.state == MotorState::kIdle || now < seed_moves_[i].end) continue;
+    if (m.state == MotorState::kHoming) {
+      m.position = 0;  // assumed: the seed reports nothing
+      m.homed = true;
+    } else {
+      m.position = m.target;
+    }
+    m.target = m.position;
+    m.state = MotorState::kIdle;
+    m.rate = 0;
+  }
+}
+
+}  // namespace hmc

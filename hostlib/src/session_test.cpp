@@ -1,0 +1,265 @@
+// Session against the simulated board (sim://, in this process): detection of v2 and seed
+// firmware, the model kept from replies and events, checks before sending, refusals explained,
+// waits, interruption and a lost link.
+#include "hmc/session.h"
+
+#include <stdlib.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <string>
+
+#include "hmc/codec.h"
+#include "hmc/sim_transport.h"
+
+namespace {
+
+using hmc::Firmware;
+using hmc::Millis;
+using hmc::MotorState;
+using hmc::Session;
+using hmc::SessionError;
+using hmc::StepperMove;
+using hmc::proto::Reason;
+
+constexpr uint32_t kFwd = hmc::proto::kActionForward;
+constexpr uint32_t kRev = hmc::proto::kActionReverse;
+constexpr uint32_t kHome = hmc::proto::kActionHome;
+
+// Every test gets its own board state directory.
+struct StateDir {
+  std::filesystem::path path;
+  StateDir() {
+    path = std::filesystem::temp_directory_path() /
+           ("hmc-session-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+    std::filesystem::remove_all(path);
+    ::setenv("HMC_SIM_STATE", path.c_str(), 1);
+  }
+  ~StateDir() { std::filesystem::remove_all(path); }
+  static inline int counter = 0;
+};
+
+std::unique_ptr<hmc::Transport> sim(const std::string& url) {
+  auto port = hmc::open_sim_port(url, {});
+  REQUIRE(port.ok());
+  return std::move(port.value());
+}
+
+// Counts the lines the host sends.
+struct Recorder {
+  std::vector<std::string> sent;
+  hmc::SessionOptions options() {
+    hmc::SessionOptions o;
+    o.on_send = [this](std::string_view line) { sent.emplace_back(line); };
+    return o;
+  }
+};
+
+std::unique_ptr<Session> open(const std::string& url, hmc::SessionOptions options = {}) {
+  auto session = Session::open(sim(url), options);
+  if (!session) FAIL(session.error().message);
+  return std::move(session.value());
+}
+
+// A transport that fails every read after `good_reads` of them, as an unplugged port does.
+class FailingTransport : public hmc::Transport {
+ public:
+  FailingTransport(std::unique_ptr<hmc::Transport> inner, int good_reads)
+      : inner_(std::move(inner)), good_reads_(good_reads) {}
+  hmc::Status write(std::string_view bytes) override {
+    writes.emplace_back(bytes);
+    return inner_->write(bytes);
+  }
+  hmc::Result<std::string> read(Millis timeout) override {
+    if (reads_++ >= good_reads_) return hmc::Error{"lost the connection to the test port (unplugged?)"};
+    return inner_->read(timeout);
+  }
+  std::string description() const override { return "failing test port"; }
+  std::vector<std::string> writes;
+
+ private:
+  std::unique_ptr<hmc::Transport> inner_;
+  int good_reads_;
+  int reads_ = 0;
+};
+
+}  // namespace
+
+TEST_CASE("a v2 board is detected and its state read") {
+  StateDir dir;
+  auto s = open("sim://?fast");
+  CHECK(s->firmware() == Firmware::kV2);
+  REQUIRE(s->version().has_value());
+  CHECK(s->version()->protocol == 2);
+  CHECK(s->model().reported);
+  CHECK(s->model().motor(1).state == MotorState::kIdle);
+  CHECK(s->model().motor(1).microstep == 16);
+  CHECK(s->model().board.servo1_us == 1472);  // centred at boot
+  CHECK(s->description().find("protocol 2") != std::string::npos);
+}
+
+TEST_CASE("a move is waited for and its end position comes from the board") {
+  StateDir dir;
+  auto s = open("sim://?fast");
+  REQUIRE(s->execute(StepperMove{1, kFwd, 16, 1600, 100}).ok());
+  CHECK(s->model().motor(1).state == MotorState::kMoving);
+  REQUIRE(s->wait_until_idle({1}).ok());
+  CHECK(s->model().motor(1).state == MotorState::kIdle);
+  CHECK(s->model().motor(1).position == 1600 * 16);
+  // Reverse at 1/4: 400 steps of 64 units.
+  REQUIRE(s->execute(StepperMove{1, kRev, 4, 400, 100}).ok());
+  REQUIRE(s->wait_until_idle({1}).ok());
+  CHECK(s->model().motor(1).position == 0);
+  CHECK(s->model().motor(1).microstep == 4);
+}
+
+TEST_CASE("the host refuses what the board would refuse, sends nothing, and says why") {
+  StateDir dir;
+  Recorder rec;
+  auto s = open("sim://?fast", rec.options());
+  REQUIRE(s->execute(StepperMove{2, kFwd, 16, 0, 200}).ok());  // runs until stopped
+  const size_t sent = rec.sent.size();
+  auto home = s->execute(StepperMove{1, kHome, 0, 0, 0});
+  REQUIRE_FALSE(home.ok());
+  CHECK(home.error().kind == SessionError::Kind::kRefused);
+  CHECK(home.error().reason == Reason::kMotorsRunning);
+  CHECK(home.error().message.find("motor 2 moves") != std::string::npos);
+  CHECK(rec.sent.size() == sent);
+
+  auto bad = s->execute(StepperMove{1, kFwd, 3, 100, 100});
+  REQUIRE_FALSE(bad.ok());
+  CHECK(bad.error().kind == SessionError::Kind::kInvalid);
+  CHECK(bad.error().message.find("microstep") != std::string::npos);
+  REQUIRE(s->stop_all().ok());
+  CHECK_FALSE(s->model().any_moving());
+}
+
+TEST_CASE("a move toward a pressed switch is refused from the model") {
+  StateDir dir;
+  auto s = open("sim://?fast");
+  // Motor 1 starts mid-travel, 204 800 units above its reverse switch: run into it.
+  REQUIRE(s->execute(StepperMove{1, kRev, 1, 2000, 50}).ok());
+  REQUIRE(s->wait_until_idle({1}).ok());
+  CHECK(s->model().motor(1).switches == 1u);
+  CHECK(s->model().board.limit_pressed(1, 0));
+  auto again = s->execute(StepperMove{1, kRev, 1, 10, 100});
+  REQUIRE_FALSE(again.ok());
+  CHECK(again.error().kind == SessionError::Kind::kRefused);
+  CHECK(again.error().reason == Reason::kLimitPressed);
+  CHECK(again.error().message.find("reverse end is pressed") != std::string::npos);
+  CHECK(s->execute(StepperMove{1, kFwd, 1, 10, 100}).ok());  // away from it is fine
+}
+
+TEST_CASE("a line the board refuses comes back explained") {
+  StateDir dir;
+  auto s = open("sim://?fast");
+  auto reply = s->send_line("STX#6#STM#3#1#1#11#1000#238#ETX");
+  REQUIRE_FALSE(reply.ok());
+  CHECK(reply.error().kind == SessionError::Kind::kNak);
+  CHECK(reply.error().reason == Reason::kChecksumMismatch);
+  CHECK(reply.error().message.find("token 8, byte 24") != std::string::npos);
+  // The session still counts replies right afterwards.
+  CHECK(s->execute(hmc::ServoMove{1, 135}).ok());
+  CHECK(s->model().board.servo1_us == hmc::proto::servo_pulse_us(135));
+}
+
+TEST_CASE("state survives between sessions on the same simulated board") {
+  StateDir dir;
+  {
+    auto s = open("sim://keep?fast");
+    REQUIRE(s->execute(StepperMove{3, kFwd, 8, 800, 100}).ok());
+    REQUIRE(s->wait_until_idle({3}).ok());
+    REQUIRE(s->execute(hmc::LedColor{2, 1, 2, 3, 4}).ok());
+  }
+  auto s = open("sim://keep?fast");
+  CHECK(s->model().motor(3).position == 800 * 32);
+  CHECK(s->model().motor(3).microstep == 8);
+  CHECK(s->model().strips[1].b == 3);
+}
+
+TEST_CASE("a board in CRC-16 mode is still recognised") {
+  StateDir dir;
+  {
+    auto s = open("sim://crc?fast");
+    REQUIRE(s->execute(hmc::ChecksumModeCommand{1}).ok());
+    CHECK(s->version()->checksum_mode == hmc::proto::ChecksumMode::kCrc16);
+    CHECK(s->execute(hmc::StatusQuery{1}).ok());  // now in CRC-16 both ways
+  }
+  auto s = open("sim://crc?fast");
+  CHECK(s->firmware() == Firmware::kV2);
+  CHECK(s->version()->checksum_mode == hmc::proto::ChecksumMode::kCrc16);
+  CHECK(s->execute(hmc::ServoMove{2, 10}).ok());
+}
+
+TEST_CASE("a silent board is taken for the seed firmware and timed") {
+  StateDir dir;
+  Recorder rec;
+  auto s = open("sim://?seed", rec.options());
+  CHECK(s->firmware() == Firmware::kSeed);
+  CHECK_FALSE(s->version().has_value());
+  CHECK(s->description().find("seed firmware") != std::string::npos);
+  // 200 steps at 1 ms: about 0.2 s, during which servo and LED would be ignored by the board.
+  const auto start = hmc::Clock::now();
+  REQUIRE(s->execute(StepperMove{1, kFwd, 16, 200, 1000}).ok());
+  auto servo = s->execute(hmc::ServoMove{1, 45});
+  REQUIRE_FALSE(servo.ok());
+  CHECK(servo.error().reason == Reason::kBusy);
+  auto query = s->execute(hmc::StatusQuery{1});
+  REQUIRE_FALSE(query.ok());
+  CHECK(query.error().message.find("seed firmware does not know it") != std::string::npos);
+  REQUIRE(s->wait_until_idle({1}).ok());
+  const auto took = std::chrono::duration_cast<Millis>(hmc::Clock::now() - start).count();
+  CHECK(took >= 200);
+  CHECK(took < 1000);
+  CHECK(s->model().motor(1).position == 200 * 16);
+  CHECK(s->execute(hmc::ServoMove{1, 45}).ok());
+}
+
+TEST_CASE("an interrupted wait stops every motor") {
+  StateDir dir;
+  hmc::SessionOptions options;
+  bool stop = false;
+  options.interrupted = [&] { return stop; };
+  auto s = open("sim://?fast", options);
+  REQUIRE(s->execute(StepperMove{3, kFwd, 16, 0, 100}).ok());
+  REQUIRE(s->execute(StepperMove{1, kFwd, 16, 100000, 100}).ok());
+  stop = true;
+  auto waited = s->wait_until_idle({1});
+  REQUIRE_FALSE(waited.ok());
+  CHECK(waited.error().kind == SessionError::Kind::kInterrupted);
+  CHECK(waited.error().message.find("every motor was sent a stop") != std::string::npos);
+  CHECK_FALSE(s->model().any_moving());
+  stop = false;
+  REQUIRE(s->refresh().ok());
+  CHECK_FALSE(s->model().any_moving());
+  CHECK(s->model().motor(1).position > 0);
+  CHECK(s->model().motor(1).position < 100000 * 16);
+}
+
+TEST_CASE("a link lost during a wait is an error, and stops are attempted") {
+  StateDir dir;
+  auto failing = std::make_unique<FailingTransport>(sim("sim://?fast"), 40);
+  FailingTransport* port = failing.get();
+  auto opened = Session::open(std::move(failing), {});
+  REQUIRE(opened.ok());
+  auto& s = opened.value();
+  REQUIRE(s->execute(StepperMove{3, kFwd, 16, 0, 100}).ok());  // motor 3 has no switch to end it
+  auto waited = s->wait_until_idle({3});
+  REQUIRE_FALSE(waited.ok());
+  CHECK(waited.error().kind == SessionError::Kind::kLink);
+  CHECK(waited.error().message.find("unplugged") != std::string::npos);
+  // The three stops were written even though no reply could be read.
+  int stops = 0;
+  for (const std::string& w : port->writes) stops += w.find("STM#1#0") != std::string::npos ||
+                                                   w.find("STM#2#0") != std::string::npos ||
+                                                   w.find("STM#3#0") != std::string::npos;
+  CHECK(stops == 3);
+}
+
+TEST_CASE("positions read as full steps") {
+  CHECK(hmc::steps_text(819200) == "3200");
+  CHECK(hmc::steps_text(64) == "0.25");
+  CHECK(hmc::steps_text(-1) == "-0.00390625");
+  CHECK(hmc::steps_text(0) == "0");
+}
