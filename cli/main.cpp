@@ -9,6 +9,7 @@
 #include "exit_codes.h"
 #include "flash_command.h"
 #include "frame_command.h"
+#include "motion_commands.h"
 #include "ports_command.h"
 #include "sim_command.h"
 
@@ -41,6 +42,7 @@ int main(int argc, char** argv) {
   app.fallthrough();  // global options may follow the subcommand: `hmc status --port sim://`
   hmc::cli::add_frame_command(app, exit_code);
   hmc::cli::add_board_commands(app, global, exit_code);
+  hmc::cli::add_motion_commands(app, global, exit_code);
   hmc::cli::add_ports_command(app, exit_code);
   hmc::cli::add_sim_command(app, exit_code);
   hmc::cli::add_flash_command(app, exit_code);

@@ -17,10 +17,6 @@ constexpr Millis kDetectTimeout{250};
 constexpr Millis kSlice{50};
 // While a motion runs and the board says nothing for this long, ask it (an event may be lost).
 constexpr Millis kStatusEvery{500};
-// Seed firmware: a move's time is known only from its steps and delay; the board's clock may
-// run a little slow, and the line takes its time to arrive.
-constexpr double kSeedTimeMargin = 1.02;
-constexpr Millis kSeedTimeSlack{30};
 // Seed firmware: how long the host assumes a homing without a step bound may take.
 constexpr Millis kSeedHomingTime{20000};
 
@@ -338,15 +334,21 @@ SessionResult<Done> Session::refresh() {
 }
 
 SessionResult<Done> Session::wait_until_idle(const std::vector<uint32_t>& motors, std::optional<Millis> limit) {
+  return wait(
+      [&] {
+        return std::none_of(motors.begin(), motors.end(),
+                            [&](uint32_t m) { return model_.motor(m).state != MotorState::kIdle; });
+      },
+      limit);
+}
+
+SessionResult<Done> Session::wait(const std::function<bool()>& done, std::optional<Millis> limit) {
   const Clock::time_point start = Clock::now();
-  const auto waiting = [&] {
-    settle_seed_motions();
-    return std::any_of(motors.begin(), motors.end(),
-                       [&](uint32_t m) { return model_.motor(m).state != MotorState::kIdle; });
-  };
   rebooted_ = false;
   Clock::time_point last_heard = Clock::now();
-  while (waiting()) {
+  for (;;) {
+    settle_seed_motions();
+    if (done()) return Done{};
     if (interrupted()) return interrupted_error();
     if (limit && Clock::now() - start > *limit) {
       SessionError e = make_error(SessionError::Kind::kNoReply,
@@ -368,7 +370,9 @@ SessionResult<Done> Session::wait_until_idle(const std::vector<uint32_t>& motors
     }
     if (!frames->empty()) last_heard = Clock::now();
     if (firmware_ == Firmware::kV2 && Clock::now() - last_heard >= kStatusEvery) {
-      for (const uint32_t m : motors) {
+      // A lost event would leave a motor "moving" here for ever: ask the moving ones.
+      for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+        if (model_.motor(m).state == MotorState::kIdle) continue;
         if (SessionResult<BoardFrame> status = execute(StatusQuery{m}); !status) {
           SessionError e = status.error();
           (void)stop_all();
@@ -378,7 +382,6 @@ SessionResult<Done> Session::wait_until_idle(const std::vector<uint32_t>& motors
       last_heard = Clock::now();
     }
   }
-  return Done{};
 }
 
 SessionResult<Done> Session::stop_all() {

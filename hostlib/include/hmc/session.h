@@ -39,6 +39,11 @@ using Millis = std::chrono::milliseconds;
 
 enum class Firmware : uint8_t { kV2, kSeed };
 
+// Seed firmware: a move's end is known only from its steps and delay; the host takes it as over
+// this much later (the board's clock may run a little slow, and its line takes time to arrive).
+inline constexpr double kSeedTimeMargin = 1.02;
+inline constexpr Millis kSeedTimeSlack{30};
+
 // Which firmware to expect: detect it with VER, or take it as given (skips the query).
 enum class FirmwareChoice : uint8_t { kDetect, kV2, kSeed };
 
@@ -118,6 +123,10 @@ class Session {
   // Waits until every motor in `motors` rests: v2 from its events, checking with STA during a
   // silence; seed from the time its move must take. nullopt limit: as long as they move.
   SessionResult<Done> wait_until_idle(const std::vector<uint32_t>& motors, std::optional<Millis> limit = {});
+  // Reads and handles what the board sends until `done()` holds (checked after every read, at
+  // least every 50 ms): the general wait behind wait_until_idle, with the same interrupt, link
+  // and silence handling. `done` may send commands through this session.
+  SessionResult<Done> wait(const std::function<bool()>& done, std::optional<Millis> limit = {});
   // Sends a stop to every motor (and, v2, waits for the replies).
   SessionResult<Done> stop_all();
   // Reads and handles what the board sends for `duration`, or until interrupted.

@@ -1,0 +1,368 @@
+// `hmc check | plan | run FILE`: motion files validated, planned (timeline, frames, velocity
+// plots) and carried out on a board with progress, Ctrl-C stopping every motor, and --from.
+#include "motion_commands.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include "exit_codes.h"
+#include "hmc/codec.h"
+#include "hmc/command_json.h"
+#include "hmc/motion_file.h"
+#include "hmc/motion_plan.h"
+#include "hmc/motion_runner.h"
+
+namespace hmc::cli {
+namespace {
+
+using motion::Plan;
+
+void print_errors(const std::vector<motion::FileError>& errors, bool json) {
+  if (json) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const motion::FileError& e : errors) {
+      list.push_back({{"file", e.where.file},
+                      {"line", e.where.line},
+                      {"column", e.where.column},
+                      {"path", e.where.path},
+                      {"expected", e.expected},
+                      {"found", e.found},
+                      {"message", e.message}});
+    }
+    std::cout << nlohmann::json{{"errors", list}} << '\n';
+    return;
+  }
+  for (const motion::FileError& e : errors) std::cerr << e.text() << '\n';
+  std::cerr << errors.size() << (errors.size() == 1 ? " error" : " errors") << "; nothing was sent\n";
+}
+
+// The file, validated and planned; prints the errors and returns nothing when it is not valid.
+std::optional<Plan> load_and_plan(const std::string& path, const motion::PlanOptions& options, bool json,
+                                  motion::MotionFile* file_out = nullptr) {
+  auto file = motion::load_motion_file(path);
+  if (!file) {
+    print_errors(file.error(), json);
+    return std::nullopt;
+  }
+  auto plan = motion::plan_motion(*file, options);
+  if (!plan) {
+    print_errors(plan.error(), json);
+    return std::nullopt;
+  }
+  if (file_out != nullptr) *file_out = std::move(*file);
+  return std::move(*plan);
+}
+
+motion::TargetFirmware target_of(const GlobalOptions& g) {
+  return g.firmware == "seed" ? motion::TargetFirmware::kSeed : motion::TargetFirmware::kV2;
+}
+
+std::string seconds(double s) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(3) << s << " s";
+  return out.str();
+}
+
+// Every frame of the plan with the time it is planned to be sent, in time order.
+struct TimedFrame {
+  double t_s;
+  size_t action;
+  std::string frame;
+};
+
+std::vector<TimedFrame> planned_frames(const Plan& plan) {
+  std::vector<TimedFrame> frames;
+  for (const motion::Action& a : plan.actions) {
+    for (const Command& c : a.setup) frames.push_back({a.start_s, a.index, encode(c).value()});
+    for (const auto& motor_stages : a.stages) {
+      for (const motion::Stage& s : motor_stages) {
+        const Command c = StepperMove{s.motor, s.dir, s.microstep, s.steps, s.delay_us};
+        frames.push_back({s.start_s, a.index, encode(c).value()});
+      }
+    }
+    for (size_t i = 0; i < a.commands.size(); ++i) {
+      const double t = i < a.commands_at_s.size() ? a.commands_at_s[i] : a.start_s;
+      frames.push_back({t, a.index, encode(a.commands[i]).value()});
+    }
+  }
+  std::stable_sort(frames.begin(), frames.end(), [](const TimedFrame& x, const TimedFrame& y) { return x.t_s < y.t_s; });
+  return frames;
+}
+
+void print_timeline(const Plan& plan) {
+  std::cout << "step  start        duration     what\n";
+  for (const motion::Action& a : plan.actions) {
+    std::cout << std::left << std::setw(6) << a.index << std::setw(13) << seconds(a.start_s) << std::setw(13)
+              << seconds(a.end_s - a.start_s) << a.description << '\n';
+  }
+  std::cout << "total " << seconds(plan.duration_s) << "; motors end at:";
+  for (const motion::MotorTrack& t : plan.tracks) {
+    std::cout << ' ' << t.name << " (motor " << t.motor << ") " << t.end_position << " steps;";
+  }
+  std::cout << '\n';
+}
+
+nlohmann::json plan_json(const Plan& plan) {
+  nlohmann::json actions = nlohmann::json::array();
+  for (const motion::Action& a : plan.actions) {
+    actions.push_back({{"index", a.index},
+                       {"start_s", a.start_s},
+                       {"end_s", a.end_s},
+                       {"description", a.description},
+                       {"line", a.where.line}});
+  }
+  nlohmann::json tracks = nlohmann::json::array();
+  for (const motion::MotorTrack& t : plan.tracks) {
+    tracks.push_back({{"name", t.name},
+                      {"motor", t.motor},
+                      {"microstep", t.microstep},
+                      {"start_position", t.start_position},
+                      {"end_position", t.end_position}});
+  }
+  nlohmann::json frames = nlohmann::json::array();
+  for (const TimedFrame& f : planned_frames(plan)) frames.push_back({{"t_s", f.t_s}, {"step", f.action}, {"frame", f.frame}});
+  return {{"duration_s", plan.duration_s}, {"actions", actions}, {"motors", tracks}, {"frames", frames}};
+}
+
+bool write_file(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << text;
+  if (!out) {
+    std::cerr << "error: cannot write " << path << '\n';
+    return false;
+  }
+  return true;
+}
+
+// --- check, plan ----------------------------------------------------------------------------
+
+void add_check(CLI::App& app, const GlobalOptions& g, int& exit_code) {
+  auto path = std::make_shared<std::string>();
+  CLI::App* cmd = app.add_subcommand("check", "validate a motion file: every mistake, with line and column");
+  cmd->add_option("file", *path, "the motion file (docs/motion-files.md)")->required();
+  cmd->callback([&g, &exit_code, path] {
+    motion::PlanOptions options;
+    options.firmware = target_of(g);
+    motion::MotionFile file;
+    std::optional<Plan> plan = load_and_plan(*path, options, g.json, &file);
+    if (!plan) {
+      exit_code = kExitInvalid;
+      return;
+    }
+    if (g.json) {
+      std::cout << nlohmann::json{{"file", *path}, {"valid", true}, {"actions", plan->actions.size()},
+                                  {"duration_s", plan->duration_s}}
+                << '\n';
+    } else {
+      std::cout << *path << ": valid: " << file.steps.size() << " steps, " << plan->actions.size()
+                << " actions unrolled, about " << seconds(plan->duration_s) << '\n';
+    }
+  });
+}
+
+void add_plan(CLI::App& app, const GlobalOptions& g, int& exit_code) {
+  struct Options {
+    std::string path, svg, csv;
+    bool frames = false;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand("plan", "show what a motion file will do: timeline, frames, velocity plots");
+  cmd->add_option("file", o->path, "the motion file")->required();
+  cmd->add_option("--plot", o->svg, "write velocity over time per motor as an SVG picture");
+  cmd->add_option("--csv", o->csv, "write the velocity data as CSV (t_s,motor,name,velocity)");
+  cmd->add_flag("--frames", o->frames, "also list every frame with its planned send time");
+  cmd->callback([&g, &exit_code, o] {
+    motion::PlanOptions options;
+    options.firmware = target_of(g);
+    options.baud = g.baud;
+    motion::MotionFile file;
+    std::optional<Plan> plan = load_and_plan(o->path, options, g.json, &file);
+    if (!plan) {
+      exit_code = kExitInvalid;
+      return;
+    }
+    if (!o->svg.empty() && !write_file(o->svg, motion::plot_svg(*plan, file.name.empty() ? o->path : file.name))) {
+      exit_code = kExitIo;
+      return;
+    }
+    if (!o->csv.empty() && !write_file(o->csv, motion::plot_csv(*plan))) {
+      exit_code = kExitIo;
+      return;
+    }
+    if (g.json) {
+      std::cout << plan_json(*plan).dump(2) << '\n';
+      return;
+    }
+    print_timeline(*plan);
+    if (o->frames) {
+      for (const TimedFrame& f : planned_frames(*plan)) {
+        std::cout << std::setw(12) << seconds(f.t_s) << "  [" << f.action << "]  " << f.frame << '\n';
+      }
+    }
+    if (!o->svg.empty()) std::cout << "plot: " << o->svg << '\n';
+  });
+}
+
+// --- run ------------------------------------------------------------------------------------
+
+// Progress: one redrawn line on a terminal, plain lines otherwise, JSON lines with --json.
+class Progress {
+ public:
+  explicit Progress(bool json) : json_(json), terminal_(!json && isatty(STDERR_FILENO) == 1) {}
+
+  void operator()(const motion::RunEvent& e) {
+    if (json_) {
+      nlohmann::json j{{"event", e.kind == motion::RunEvent::Kind::kActionStarted ? "started"
+                                 : e.kind == motion::RunEvent::Kind::kActionDone  ? "done"
+                                                                                   : "returning"},
+                       {"total", e.total},
+                       {"elapsed_s", e.elapsed_s},
+                       {"remaining_s", e.remaining_s}};
+      if (e.action != nullptr) {
+        j["step"] = e.action->index;
+        j["description"] = e.action->description;
+      }
+      std::cout << j << std::endl;
+      return;
+    }
+    if (e.kind == motion::RunEvent::Kind::kReturning) {
+      finish_line();
+      std::cerr << "returning the motors to where the plan has them at the resumed step\n";
+      return;
+    }
+    if (e.kind == motion::RunEvent::Kind::kActionDone && !terminal_) return;
+    std::ostringstream line;
+    line << "step " << e.action->index << " of " << e.total << "  " << std::fixed << std::setprecision(1)
+         << e.elapsed_s << " s elapsed, ~" << e.remaining_s << " s left  " << e.action->description;
+    if (!terminal_) {
+      std::cerr << line.str() << '\n';
+      return;
+    }
+    const size_t width = 24;
+    const size_t filled = e.total == 0 ? width : width * (e.action->index - (e.kind == motion::RunEvent::Kind::kActionDone ? 0 : 1)) / e.total;
+    std::string text = "[" + std::string(filled, '#') + std::string(width - filled, '.') + "] " + line.str();
+    if (text.size() > 110) text = text.substr(0, 107) + "...";
+    std::cerr << "\r\033[K" << text << std::flush;
+    open_ = true;
+  }
+
+  void finish_line() {
+    if (open_) std::cerr << '\n';
+    open_ = false;
+  }
+
+ private:
+  bool json_;
+  bool terminal_;
+  bool open_ = false;
+};
+
+void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
+  struct Options {
+    std::string path;
+    bool dry_run = false;
+    size_t from = 1;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand("run", "run a motion file on the board (validated first; Ctrl-C stops every motor)");
+  cmd->add_option("file", o->path, "the motion file")->required();
+  cmd->add_flag("--dry-run", o->dry_run, "print the timeline and the exact frames; no board");
+  cmd->add_option("--from", o->from, "start at this step (as numbered by the plan; after an interruption)")
+      ->check(CLI::PositiveNumber);
+  cmd->callback([&g, &exit_code, o] {
+    motion::PlanOptions options;
+    options.firmware = target_of(g);
+    options.baud = g.baud;
+    if (o->dry_run) {
+      std::optional<Plan> plan = load_and_plan(o->path, options, g.json);
+      if (!plan) {
+        exit_code = kExitInvalid;
+        return;
+      }
+      if (g.json) {
+        std::cout << plan_json(*plan).dump(2) << '\n';
+        return;
+      }
+      print_timeline(*plan);
+      std::cout << "\nframes (planned send time, step):\n";
+      for (const TimedFrame& f : planned_frames(*plan)) {
+        std::cout << std::setw(12) << seconds(f.t_s) << "  [" << f.action << "]  " << f.frame << '\n';
+      }
+      return;
+    }
+    // Validate before touching the port: a file with mistakes never reaches the board.
+    motion::MotionFile file;
+    if (!load_and_plan(o->path, options, g.json, &file)) {
+      exit_code = kExitInvalid;
+      return;
+    }
+    std::unique_ptr<Session> session = connect(g, exit_code);
+    if (!session) return;
+    options.firmware = session->firmware() == Firmware::kV2 ? motion::TargetFirmware::kV2 : motion::TargetFirmware::kSeed;
+    if (session->firmware() == Firmware::kV2) {
+      // Absolute moves start from where the board says each motor is.
+      for (const motion::MotorConfig& m : file.motors) {
+        const MotorStatus& status = session->model().motor(m.motor);
+        options.start_position[m.motor - 1] =
+            static_cast<int64_t>(std::llround(static_cast<double>(status.position) * m.microstep / 256.0));
+      }
+    }
+    auto plan = motion::plan_motion(file, options);
+    if (!plan) {
+      print_errors(plan.error(), g.json);
+      exit_code = kExitInvalid;
+      return;
+    }
+    if (o->from > plan->actions.size()) {
+      exit_code = report_error(g, SessionError{SessionError::Kind::kInvalid,
+                                               "--from " + std::to_string(o->from) + ": the plan has only " +
+                                                   std::to_string(plan->actions.size()) + " steps",
+                                               proto::Reason::kOk});
+      return;
+    }
+    Progress progress(g.json);
+    motion::RunOptions run_options;
+    run_options.from = o->from;
+    run_options.on_event = [&progress](const motion::RunEvent& e) { progress(e); };
+    motion::MotionRunner runner(*session, *plan);
+    const motion::RunReport report = runner.run(run_options);
+    progress.finish_line();
+    if (report.error) {
+      exit_code = report_error(g, *report.error);
+      const motion::Action& at = plan->actions[report.stopped_at - 1];
+      if (g.json) {
+        std::cout << nlohmann::json{{"stopped_at", report.stopped_at}, {"state", model_to_json(*session)}} << '\n';
+      } else {
+        std::cerr << "stopped during step " << report.stopped_at << " of " << plan->actions.size() << " ("
+                  << at.description << ", " << o->path << ":" << at.where.line << ")\n";
+        for (const MotorStatus& m : session->model().motors) std::cerr << "  motor " << m.motor << " " << position_words(m) << '\n';
+        std::cerr << "resume with: hmc run " << o->path << " --from " << report.stopped_at << '\n';
+      }
+      return;
+    }
+    if (g.json) {
+      std::cout << nlohmann::json{{"completed", report.completed}, {"state", model_to_json(*session)}} << '\n';
+    } else {
+      std::cout << "done: " << report.completed << " steps";
+      for (const motion::MotorTrack& t : plan->tracks) {
+        std::cout << "; " << t.name << " " << position_words(session->model().motor(t.motor));
+      }
+      std::cout << '\n';
+    }
+  });
+}
+
+}  // namespace
+
+void add_motion_commands(CLI::App& app, const GlobalOptions& global, int& exit_code) {
+  add_check(app, global, exit_code);
+  add_plan(app, global, exit_code);
+  add_run(app, global, exit_code);
+}
+
+}  // namespace hmc::cli

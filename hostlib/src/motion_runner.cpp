@@ -1,0 +1,206 @@
+// MotionRunner: a plan's actions carried out in order through a session, stages fed per motor.
+#include "hmc/motion_runner.h"
+
+#include <algorithm>
+
+namespace hmc::motion {
+namespace {
+
+constexpr int64_t kUnitsPerStep = 256;  // the board counts positions in 1/256 step
+// Returning to the plan's positions before resuming: a safe constant rate.
+constexpr uint32_t kReturnDelayUs = 500;
+
+StepperMove stage_command(const Stage& s) { return StepperMove{s.motor, s.dir, s.microstep, s.steps, s.delay_us}; }
+
+}  // namespace
+
+std::array<std::optional<int64_t>, proto::kMotorCount> planned_positions(const Plan& plan, size_t index) {
+  std::array<std::optional<int64_t>, proto::kMotorCount> at{};
+  for (const MotorTrack& t : plan.tracks) at[t.motor - 1] = t.start_position;
+  for (const Action& a : plan.actions) {
+    if (a.index >= index) break;
+    if (a.kind == ActionKind::kHome) {
+      for (const uint32_t m : a.motors) at[m - 1] = 0;
+    }
+    for (const std::vector<Stage>& motor_stages : a.stages) {
+      for (const Stage& s : motor_stages) {
+        std::optional<int64_t>& p = at[s.motor - 1];
+        if (p) *p += s.dir == proto::kActionForward ? int64_t{s.steps} : -int64_t{s.steps};
+      }
+    }
+  }
+  return at;
+}
+
+MotionRunner::MotionRunner(Session& session, const Plan& plan) : session_(session), plan_(plan) {}
+
+void MotionRunner::emit(RunEvent::Kind kind, const Action* action) {
+  if (!on_event_) return;
+  RunEvent e;
+  e.kind = kind;
+  e.action = action;
+  e.total = plan_.actions.size();
+  e.elapsed_s = std::chrono::duration<double>(Clock::now() - started_).count();
+  const double at = action == nullptr ? 0 : (kind == RunEvent::Kind::kActionDone ? action->end_s : action->start_s);
+  e.remaining_s = std::max(0.0, plan_.duration_s - at);
+  on_event_(e);
+}
+
+RunReport MotionRunner::run(const RunOptions& options) {
+  on_event_ = options.on_event;
+  started_ = Clock::now();
+  RunReport report;
+  const auto fail = [&](size_t at, const SessionError& error) {
+    report.stopped_at = at;
+    report.error = error;
+    for (std::deque<Stage>& q : queued_) q.clear();
+    // An interruption or a lost link has stopped the motors already; a refusal has not.
+    if (error.kind != SessionError::Kind::kInterrupted && error.kind != SessionError::Kind::kLink) {
+      (void)session_.stop_all();
+    }
+    return report;
+  };
+  if (options.from > 1 && options.return_to_plan) {
+    if (SessionResult<Done> back = return_to(planned_positions(plan_, options.from)); !back) {
+      return fail(options.from, back.error());
+    }
+  }
+  for (const Action& action : plan_.actions) {
+    if (action.index < options.from) continue;
+    emit(RunEvent::Kind::kActionStarted, &action);
+    if (SessionResult<Done> done = run_action(action); !done) return fail(action.index, done.error());
+    ++report.completed;
+    emit(RunEvent::Kind::kActionDone, &action);
+  }
+  // Moves that did not wait end the file too.
+  if (SessionResult<Done> rest = wait_motors({1, 2, 3}); !rest) return fail(plan_.actions.size(), rest.error());
+  return report;
+}
+
+SessionResult<Done> MotionRunner::run_action(const Action& action) {
+  if (SessionResult<Done> fed = feed(); !fed) return fed;
+  const Clock::time_point begun = Clock::now();
+  // A motor still finishing a move that did not wait must rest before it is given another.
+  if (action.kind == ActionKind::kMove || action.kind == ActionKind::kHome) {
+    if (SessionResult<Done> rested = wait_motors(action.motors); !rested) return rested;
+  }
+  for (const Command& c : action.setup) {
+    if (SessionResult<BoardFrame> r = session_.execute(c); !r) return r.error();
+  }
+  switch (action.kind) {
+    case ActionKind::kMove:
+      if (SessionResult<Done> started = start_stages(action.stages); !started) return started;
+      return action.wait_for_motors ? wait_motors(action.motors) : SessionResult<Done>(Done{});
+    case ActionKind::kHome:
+      // One motor after another: homing needs every motor at rest.
+      for (const Command& c : action.commands) {
+        if (SessionResult<BoardFrame> r = session_.execute(c); !r) return r.error();
+        if (SessionResult<Done> homed = wait_motors({std::get<StepperMove>(c).motor}); !homed) return homed;
+      }
+      return Done{};
+    case ActionKind::kStop:
+      for (const Command& c : action.commands) {
+        if (const auto* stop = std::get_if<StepperMove>(&c)) queued_[stop->motor - 1].clear();
+        if (SessionResult<BoardFrame> r = session_.execute(c); !r) return r.error();
+      }
+      return wait_motors(action.motors);
+    case ActionKind::kWait:
+      if (!action.motors.empty()) return wait_motors(action.motors);
+      return wait_until(begun + std::chrono::duration_cast<Clock::duration>(
+                                    std::chrono::duration<double>(action.end_s - action.start_s)));
+    case ActionKind::kServo:
+    case ActionKind::kLed:
+      for (size_t i = 0; i < action.commands.size(); ++i) {
+        const double offset = i < action.commands_at_s.size() ? action.commands_at_s[i] - action.start_s : 0.0;
+        if (offset > 0) {
+          const auto when = begun + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(offset));
+          if (SessionResult<Done> waited = wait_until(when); !waited) return waited;
+        }
+        if (SessionResult<BoardFrame> r = session_.execute(action.commands[i]); !r) return r.error();
+      }
+      return Done{};
+  }
+  return Done{};
+}
+
+SessionResult<Done> MotionRunner::start_stages(const std::vector<std::vector<Stage>>& stages) {
+  // First stages go out in the plan's order: it timed each motor's start from it.
+  for (const std::vector<Stage>& motor_stages : stages) {
+    if (motor_stages.empty()) continue;
+    std::deque<Stage>& q = queued_[motor_stages.front().motor - 1];
+    q.assign(motor_stages.begin(), motor_stages.end());
+    const Stage first = q.front();
+    q.pop_front();
+    if (SessionResult<BoardFrame> r = session_.execute(stage_command(first)); !r) return r.error();
+  }
+  return Done{};
+}
+
+SessionResult<Done> MotionRunner::feed() {
+  for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+    std::deque<Stage>& q = queued_[m - 1];
+    if (q.empty() || session_.model().motor(m).state != MotorState::kIdle) continue;
+    // The previous stage ended early (a limit switch, the emergency switch): the rest is void.
+    const std::optional<MotionEnd>& end = session_.model().last_end[m - 1];
+    if (end && *end != MotionEnd::kCompleted) {
+      q.clear();
+      return SessionError{SessionError::Kind::kRefused,
+                          "motor " + std::to_string(m) + "'s move ended early (" + motion_end_name(*end) + ")",
+                          proto::Reason::kOk};
+    }
+    const Stage next = q.front();
+    q.pop_front();
+    if (SessionResult<BoardFrame> r = session_.execute(stage_command(next)); !r) return r.error();
+  }
+  return Done{};
+}
+
+SessionResult<Done> MotionRunner::wait_motors(const std::vector<uint32_t>& motors) {
+  feed_error_.reset();
+  SessionResult<Done> waited = session_.wait([&] {
+    if (SessionResult<Done> fed = feed(); !fed) {
+      feed_error_ = fed.error();
+      return true;
+    }
+    return std::all_of(motors.begin(), motors.end(), [&](uint32_t m) {
+      return queued_[m - 1].empty() && session_.model().motor(m).state == MotorState::kIdle;
+    });
+  });
+  if (feed_error_) return *feed_error_;
+  return waited;
+}
+
+SessionResult<Done> MotionRunner::wait_until(Clock::time_point when) {
+  feed_error_.reset();
+  SessionResult<Done> waited = session_.wait([&] {
+    if (SessionResult<Done> fed = feed(); !fed) {
+      feed_error_ = fed.error();
+      return true;
+    }
+    return Clock::now() >= when;
+  });
+  if (feed_error_) return *feed_error_;
+  return waited;
+}
+
+SessionResult<Done> MotionRunner::return_to(const std::array<std::optional<int64_t>, proto::kMotorCount>& positions) {
+  if (session_.firmware() != Firmware::kV2) return Done{};  // the seed reports no positions
+  if (SessionResult<Done> fresh = session_.refresh(); !fresh) return fresh;
+  std::vector<uint32_t> moving;
+  for (const MotorTrack& t : plan_.tracks) {
+    const std::optional<int64_t>& target = positions[t.motor - 1];
+    if (!target) continue;
+    const MotorStatus& m = session_.model().motor(t.motor);
+    const int64_t now = m.position * t.microstep / kUnitsPerStep;
+    const int64_t delta = *target - now;
+    if (delta == 0) continue;
+    if (moving.empty()) emit(RunEvent::Kind::kReturning, nullptr);
+    const StepperMove move{t.motor, delta > 0 ? proto::kActionForward : proto::kActionReverse, t.microstep,
+                           static_cast<uint32_t>(delta > 0 ? delta : -delta), kReturnDelayUs};
+    if (SessionResult<BoardFrame> r = session_.execute(move); !r) return r.error();
+    moving.push_back(t.motor);
+  }
+  return wait_motors(moving);
+}
+
+}  // namespace hmc::motion
