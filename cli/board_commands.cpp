@@ -79,26 +79,33 @@ int wait_and_report(const GlobalOptions& g, Session& s, const std::vector<uint32
 
 void add_send(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   struct Options {
-    std::vector<std::string> words;
+    std::string first;                // kept whole: a list option would lose `[...]` around it
+    std::vector<std::string> values;  // after a command name
     bool raw = false;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("send", "send one command: a frame, [#NAME#v1#...] or NAME v1 ... and show the reply");
-  cmd->add_option("command", o->words, "STX#...#ETX, '[#SVM#1#135]', or SVM 1 135")->required();
+  cmd->add_option("command", o->first, "STX#...#ETX, '[#SVM#1#135]', or a name: SVM 1 135")->required();
+  cmd->add_option("values", o->values, "the values after a command name");
   cmd->add_flag("--raw", o->raw, "send the first argument's bytes unchanged, unchecked (to see the board refuse)");
   cmd->callback([&g, &exit_code, o] {
     run_on_board(g, exit_code, [&](Session& s) {
       SessionResult<BoardFrame> reply = BoardFrame{Ack{}};
       if (o->raw) {
-        if (o->words.size() != 1) return usage_error(g, "--raw takes the line as one argument (quote it)");
-        reply = s.send_line(o->words[0]);
+        if (!o->values.empty()) return usage_error(g, "--raw takes the line as one argument (quote it)");
+        reply = s.send_line(o->first);
       } else {
-        Result<Command, Diagnostic> command =
-            o->words.size() == 1 && o->words[0].find('#') != std::string::npos ? parse_input(o->words[0])
-                                                                               : command_from_words(o->words);
+        std::vector<std::string> words{o->first};
+        words.insert(words.end(), o->values.begin(), o->values.end());
+        Result<Command, Diagnostic> command = o->values.empty() && o->first.find('#') != std::string::npos
+                                                  ? parse_input(o->first)
+                                                  : command_from_words(words);
         if (!command) {
-          if (!g.json) print_refusal(std::cerr, o->words.size() == 1 ? o->words[0] : "", command.error());
-          if (g.json) report_error(g, SessionError{SessionError::Kind::kInvalid, command.error().message, command.error().reason});
+          if (g.json) {
+            report_error(g, SessionError{SessionError::Kind::kInvalid, command.error().message, command.error().reason});
+          } else {
+            print_refusal(std::cerr, o->values.empty() ? o->first : "", command.error());
+          }
           return static_cast<int>(kExitInvalid);
         }
         reply = s.execute(*command);

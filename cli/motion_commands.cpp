@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -267,6 +268,7 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     std::string path;
     bool dry_run = false;
     size_t from = 1;
+    std::string at;  // where the motors were when the file first started: "0,-,25600"
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("run", "run a motion file on the board (validated first; Ctrl-C stops every motor)");
@@ -274,6 +276,9 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   cmd->add_flag("--dry-run", o->dry_run, "print the timeline and the exact frames; no board");
   cmd->add_option("--from", o->from, "start at this step (as numbered by the plan; after an interruption)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--at", o->at,
+                  "with --from: where motors 1,2,3 were (steps; - unknown) when the file first started, as the "
+                  "interrupted run printed; they are first moved to where the plan has them at that step");
   cmd->callback([&g, &exit_code, o] {
     motion::PlanOptions options;
     options.firmware = target_of(g);
@@ -304,7 +309,22 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     std::unique_ptr<Session> session = connect(g, exit_code);
     if (!session) return;
     options.firmware = session->firmware() == Firmware::kV2 ? motion::TargetFirmware::kV2 : motion::TargetFirmware::kSeed;
-    if (session->firmware() == Firmware::kV2) {
+    if (!o->at.empty()) {
+      // Resuming: the plan starts where the first run started.
+      std::stringstream list(o->at);
+      std::string item;
+      for (uint32_t m = 1; m <= proto::kMotorCount && std::getline(list, item, ','); ++m) {
+        if (item == "-") continue;
+        char* end = nullptr;
+        const long long v = std::strtoll(item.c_str(), &end, 10);
+        if (item.empty() || *end != '\0') {
+          exit_code = report_error(g, SessionError{SessionError::Kind::kInvalid,
+                                                   "--at: '" + item + "' is not a number of steps or -", proto::Reason::kOk});
+          return;
+        }
+        options.start_position[m - 1] = v;
+      }
+    } else if (session->firmware() == Firmware::kV2) {
       // Absolute moves start from where the board says each motor is.
       for (const motion::MotorConfig& m : file.motors) {
         const MotorStatus& status = session->model().motor(m.motor);
@@ -341,7 +361,13 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
         std::cerr << "stopped during step " << report.stopped_at << " of " << plan->actions.size() << " ("
                   << at.description << ", " << o->path << ":" << at.where.line << ")\n";
         for (const MotorStatus& m : session->model().motors) std::cerr << "  motor " << m.motor << " " << position_words(m) << '\n';
-        std::cerr << "resume with: hmc run " << o->path << " --from " << report.stopped_at << '\n';
+        std::string origin;
+        for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+          const std::optional<int64_t>& p = options.start_position[m - 1];
+          origin += (m > 1 ? "," : "") + (p ? std::to_string(*p) : std::string("-"));
+        }
+        std::cerr << "resume with: hmc run " << o->path << " --from " << report.stopped_at
+                  << (session->firmware() == Firmware::kV2 ? " --at " + origin : std::string()) << '\n';
       }
       return;
     }

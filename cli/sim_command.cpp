@@ -19,6 +19,12 @@
 namespace hmc::cli {
 namespace {
 
+volatile pid_t g_child = 0;
+
+void forward_signal(int signal_number) {
+  if (g_child > 0) kill(g_child, signal_number);
+}
+
 // hmc-sim beside this program (installed together), in the build tree, or on the PATH.
 std::string find_simulator() {
   if (const char* env = std::getenv("HMC_SIM_BIN"); env != nullptr && *env != '\0') return env;
@@ -81,9 +87,15 @@ int run_simulator(const SimArgs& a) {
     _exit(kExitIo);
   }
   close(err[1]);
-  // Ctrl-C reaches the child too (same process group); this side only waits for it to end.
-  signal(SIGINT, SIG_IGN);
-  signal(SIGTERM, SIG_IGN);
+  // Ctrl-C reaches the child too (same process group); a signal sent to this process alone
+  // (kill, a service manager, timeout) is passed on, so stopping `hmc sim` stops the board.
+  g_child = child;
+  struct sigaction pass_on {};
+  pass_on.sa_handler = forward_signal;
+  pass_on.sa_flags = SA_RESTART;  // keep relaying what the simulator prints as it stops
+  sigemptyset(&pass_on.sa_mask);
+  sigaction(SIGINT, &pass_on, nullptr);
+  sigaction(SIGTERM, &pass_on, nullptr);
   std::unique_ptr<FILE, int (*)(FILE*)> in(fdopen(err[0], "r"), fclose);
   char buffer[1024];
   while (in && std::fgets(buffer, sizeof buffer, in.get()) != nullptr) {

@@ -457,6 +457,7 @@ void Session::apply(const BoardFrame& frame) {
       MotorStatus& m = s.model_.motor(e.motor);
       m.state = MotorState::kIdle;
       m.position = e.position;
+      m.target = e.position;  // a motion that ended has reached its end, whatever it aimed at
       m.rate = 0;
       m.endless = false;
       s.model_.last_end[e.motor - 1] = e.how;

@@ -1,0 +1,152 @@
+#!/usr/bin/env bash
+# Motion files through the real `hmc` binary: check, plan (with its SVG), run --dry-run, a file
+# with five mistakes (five messages, nothing sent), a run on hmc-sim over TCP whose trace and
+# final status match the plan, and a run interrupted with SIGINT (every motor stopped) then
+# resumed with --from to the end of the file.
+# Usage: motion_test.sh HMC_BINARY HMC_SIM_BINARY SOURCE_DIR
+set -uo pipefail
+if [[ $# -ne 3 || ! -x $1 || ! -x $2 || ! -d $3 ]]; then
+  echo "usage: $0 HMC_BINARY HMC_SIM_BINARY SOURCE_DIR" >&2
+  exit 2
+fi
+hmc=$(realpath "$1")
+sim=$(realpath "$2")
+src=$(realpath "$3")
+work=$(mktemp -d)
+cd "$work" || exit 1
+export HMC_SIM_STATE=$work/state
+unset HMC_PORT
+failures=0
+sim_pid=
+
+cleanup() {
+  [[ -n $sim_pid ]] && kill -9 "$sim_pid" 2>/dev/null
+  wait 2>/dev/null
+  rm -rf "$work"
+}
+trap cleanup EXIT
+
+fail() {
+  failures=$((failures + 1))
+  printf 'FAIL %s\n' "$*"
+}
+
+# Starts hmc-sim on a free TCP port with a trace; sets $port.
+start_sim() {
+  "$sim" --tcp 127.0.0.1:0 --no-self-test --trace "$work/trace.jsonl" "$@" 2>"$work/sim.err" &
+  sim_pid=$!
+  for _ in $(seq 100); do
+    port=$(grep -o 'tcp://[0-9.:]*' "$work/sim.err" | head -1)
+    [[ -n $port ]] && return 0
+    sleep 0.05
+  done
+  fail "hmc-sim did not start: $(cat "$work/sim.err")"
+  exit 1
+}
+
+# Stops hmc-sim cleanly, so its trace is complete.
+stop_sim() {
+  kill -TERM "$sim_pid" 2>/dev/null
+  wait "$sim_pid" 2>/dev/null
+  sim_pid=
+}
+
+# --- check, plan, dry run ---------------------------------------------------------------------
+for f in "$src"/examples/*.json; do
+  out=$("$hmc" check "$f" 2>&1) || fail "check $f: $out"
+  [[ $out == *": valid: "* ]] || fail "check $f says: $out"
+done
+
+out=$("$hmc" plan "$src/examples/pan-tilt-scan.json" --plot "$work/plot.svg" --csv "$work/plot.csv" 2>&1) ||
+  fail "plan: $out"
+grep -q '<svg' "$work/plot.svg" || fail "plan --plot wrote no SVG"
+[[ $(grep -c '<polyline' "$work/plot.svg") -ge 2 ]] || fail "the SVG has no velocity line per motor"
+[[ $(head -1 "$work/plot.csv") == "t_s,motor,name,velocity" ]] || fail "CSV header: $(head -1 "$work/plot.csv")"
+
+out=$("$hmc" run "$src/examples/home-then-together.json" --dry-run 2>&1) || fail "dry run: $out"
+grep -Eq 'STX#6#STM#1#3#16#0#0#20#ETX' <<<"$out" || fail "dry run lists no homing frame: $out"
+grep -Eq '^ *[0-9.]+ s +\[3\] +STX#6#STM#3#' <<<"$out" || fail "dry run lists no timed frame for step 3: $out"
+
+# --- five mistakes: five messages, file:line:column, nothing sent --------------------------------
+start_sim
+out=$("$hmc" --port "$port" run "$src/cli/testdata/five-mistakes.json" 2>&1)
+code=$?
+[[ $code == 1 ]] || fail "five mistakes: exit $code, want 1"
+for want in 'five-mistakes.json:4:38: \$.motors.pan.microstep: microstep 3 is not a power of two' \
+            'five-mistakes.json:9:42: \$.steps\[1\].move.sped: unknown key .*did you mean .speed.' \
+            'five-mistakes.json:10:24: \$.steps\[2\].move.motor: unknown motor .lift.' \
+            'five-mistakes.json:11:34: \$.steps\[3\].servo.angle: angle 200 degrees is out of range' \
+            'five-mistakes.json:12:38: \$.steps\[4\].move.to: position 6400 steps is above tilt.s max limit' \
+            '^5 errors; nothing was sent$'; do
+  grep -Eq -- "$want" <<<"$out" || fail "five mistakes: no line matching $want in:
+$out"
+done
+[[ $(grep -c 'five-mistakes.json:' <<<"$out") == 5 ]] || fail "five mistakes: not exactly five messages:
+$out"
+stop_sim
+if grep -q '"ev":"rx"' "$work/trace.jsonl"; then fail "five mistakes: the board received something"; fi
+
+# --- a run on hmc-sim over TCP matches its plan ---------------------------------------------------
+rm -f "$work/trace.jsonl"
+start_sim --fast
+out=$("$hmc" --port "$port" run "$src/examples/home-then-together.json" 2>&1) || fail "run: $out"
+grep -q '^done: 4 steps' <<<"$out" || fail "run did not finish: $out"
+status=$("$hmc" --port "$port" status --json 2>&1)
+pos() { python3 -c 'import json,sys; d=json.load(sys.stdin); print(d["motors"][int(sys.argv[1])-1]["position"])' "$1" <<<"$status"; }
+[[ $(pos 1) == $((1600 * 16)) ]] || fail "motor 1 ends at $(pos 1), want $((1600 * 16))"
+[[ $(pos 2) == $((4000 * 16)) ]] || fail "motor 2 ends at $(pos 2), want $((4000 * 16))"
+[[ $(pos 3) == $((300 * 64)) ]] || fail "motor 3 ends at $(pos 3), want $((300 * 64))"
+stop_sim
+# Every STM the board received was carried out to the step (homing aside).
+python3 - "$work/trace.jsonl" <<'PY' || fail "the trace does not match the frames sent"
+import json, sys
+rx, steps = [], {1: [], 2: [], 3: []}
+for line in open(sys.argv[1]):
+    e = json.loads(line)
+    if e["ev"] == "rx" and "#STM#" in e["line"]:
+        f = e["line"].split("#")
+        rx.append((e["t"], int(f[3]), int(f[4]), int(f[6])))
+    if e["ev"] == "step":
+        steps[e["motor"]].append(e["t"])
+bad = 0
+for i, (t, motor, action, count) in enumerate(rx):
+    if action not in (1, 2):
+        continue
+    until = next((r[0] for r in rx[i + 1:] if r[1] == motor), float("inf"))
+    done = sum(1 for s in steps[motor] if t < s <= until)
+    if done != count:
+        print(f"motor {motor}: {done} steps for a move of {count}")
+        bad += 1
+sys.exit(1 if bad or not rx else 0)
+PY
+
+# --- interrupted, then resumed with --from --------------------------------------------------------
+rm -f "$work/trace.jsonl"
+start_sim
+"$hmc" --port "$port" run "$src/examples/camera-slider.json" >"$work/run.out" 2>"$work/run.err" &
+run_pid=$!
+sleep 2.5
+kill -INT "$run_pid"
+wait "$run_pid"
+code=$?
+[[ $code == 130 ]] || fail "interrupted run: exit $code, want 130: $(cat "$work/run.err")"
+grep -q 'every motor was sent a stop' "$work/run.err" || fail "interrupted run says: $(cat "$work/run.err")"
+resume=$(grep -o 'resume with: hmc run .*' "$work/run.err")
+from=$(grep -o -- '--from [0-9]*' <<<"$resume" | grep -o '[0-9]*$')
+at=$(grep -o -- '--at [-0-9,]*' <<<"$resume" | cut -d' ' -f2)
+[[ -n $from && $at == "-,-,0" ]] || fail "interrupted run gives no --from and --at -,-,0: $(cat "$work/run.err")"
+status=$("$hmc" --port "$port" status --json 2>&1)
+moving=$(python3 -c 'import json,sys; d=json.load(sys.stdin); print(sum(m["state"] != "idle" for m in d["motors"]))' <<<"$status")
+[[ $moving == 0 ]] || fail "after the interruption $moving motors still move: $status"
+out=$("$hmc" --port "$port" run "$src/examples/camera-slider.json" --from "${from:-1}" --at "${at:--,-,0}" 2>&1) ||
+  fail "resume: $out"
+grep -q '^done:' <<<"$out" || fail "resumed run did not finish: $out"
+status=$("$hmc" --port "$port" status --json 2>&1)
+[[ $(pos 3) == 0 ]] || fail "after resuming, the slider ends at $(pos 3), want 0 (where the file leaves it)"
+stop_sim
+
+if ((failures > 0)); then
+  echo "motion_test: $failures failures"
+  exit 1
+fi
+echo "motion_test: all checks passed"
