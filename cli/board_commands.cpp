@@ -282,7 +282,7 @@ void add_servo(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   auto move = std::make_shared<ServoMove>();
   CLI::App* cmd = app.add_subcommand("servo", "turn a servo to an angle");
   cmd->add_option("servo", move->servo, "1 (pan) or 2 (tilt)")->required();
-  cmd->add_option("angle", move->angle, "degrees, 0-180 (10-170 advised)")->required();
+  cmd->add_option("angle", move->angle, "degrees, 10-170 (90 is centre)")->required();
   cmd->callback([&g, &exit_code, move] {
     run_on_board(g, exit_code, [&](Session& s) {
       for (const Warning& w : lint(Command{*move})) {
