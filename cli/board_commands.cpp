@@ -3,6 +3,7 @@
 #include "board_commands.h"
 
 #include <cmath>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
@@ -121,6 +122,87 @@ void add_send(CLI::App& app, const GlobalOptions& g, int& exit_code) {
         print_board_frame(std::cout, *reply);
       }
       return static_cast<int>(kExitOk);
+    });
+  });
+}
+
+// --- stream -------------------------------------------------------------------------------
+
+void add_stream(CLI::App& app, const GlobalOptions& g, int& exit_code) {
+  struct Options {
+    std::string path;
+    bool one_at_a_time = false;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand(
+      "stream", "send a file of commands (one per line: frame, [#...] or words) as fast as the link allows");
+  cmd->add_option("file", o->path, "the file, or - for standard input")->required();
+  cmd->add_flag("--one-at-a-time", o->one_at_a_time, "wait for each reply before the next line (for comparison)");
+  cmd->callback([&g, &exit_code, o] {
+    // Every line is read and checked before the port is opened: a file with a mistake sends nothing.
+    std::ifstream file;
+    if (o->path != "-") {
+      file.open(o->path, std::ios::binary);
+      if (!file) {
+        exit_code = report_error(g, SessionError{SessionError::Kind::kLink, "cannot read " + o->path, proto::Reason::kOk});
+        return;
+      }
+    }
+    std::istream& in = o->path == "-" ? std::cin : file;
+    std::vector<Command> commands;
+    std::vector<size_t> line_numbers;
+    std::string text;
+    for (size_t number = 1; std::getline(in, text); ++number) {
+      if (!text.empty() && text.back() == '\r') text.pop_back();
+      if (is_blank(text)) continue;
+      Result<Command, Diagnostic> command = text.find('#') != std::string::npos ? parse_input(text) : [&] {
+        std::istringstream words_in(text);
+        std::vector<std::string> words;
+        for (std::string w; words_in >> w;) words.push_back(w);
+        return command_from_words(words);
+      }();
+      if (!command) {
+        std::cerr << o->path << ":" << number << ": ";
+        print_refusal(std::cerr, text, command.error());
+        exit_code = kExitInvalid;
+        return;
+      }
+      commands.push_back(*command);
+      line_numbers.push_back(number);
+    }
+    run_on_board(g, exit_code, [&](Session& s) {
+      const Clock::time_point start = Clock::now();
+      SessionResult<Session::StreamReport> report = s.stream(commands, !o->one_at_a_time);
+      const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+      if (!report) return report_error(g, report.error());
+      size_t bytes = 0;
+      for (size_t i = 0; i < report->sent; ++i) bytes += encode(commands[i]).value().size() + 1;
+      const double capacity = g.baud / 10.0;
+      const double share = seconds > 0 ? static_cast<double>(bytes) / seconds / capacity : 0.0;
+      if (g.json) {
+        nlohmann::json j{{"sent", report->sent}, {"accepted", report->accepted}, {"bytes", bytes},
+                         {"seconds", seconds}, {"link_share", share}};
+        if (report->refused) {
+          j["refused"] = {{"index", *report->refused + 1}, {"line", line_numbers[*report->refused]}, {"why", report->why}};
+          j["refused_after"] = report->refused_after.size();
+        }
+        std::cout << j << '\n';
+      } else {
+        std::cout << "streamed " << report->sent << " of " << commands.size() << " lines, " << bytes << " bytes in "
+                  << std::fixed << std::setprecision(3) << seconds << " s: " << std::setprecision(1) << share * 100
+                  << " % of the line's " << static_cast<int>(capacity) << " bytes/s"
+                  << (o->one_at_a_time ? " (one at a time)" : "") << '\n';
+      }
+      if (!report->refused) return static_cast<int>(kExitOk);
+      if (!g.json) {
+        const size_t k = *report->refused;
+        const size_t after = report->sent - k - 1;
+        std::cerr << "error: " << o->path << ":" << line_numbers[k] << " (command " << k + 1 << ") was refused: " << report->why
+                  << "\n  the " << k << " commands before it were carried out; " << after
+                  << " more were already on their way and " << (after - report->refused_after.size())
+                  << " of them were carried out; nothing after those was sent\n";
+      }
+      return static_cast<int>(kExitInvalid);
     });
   });
 }
@@ -443,6 +525,7 @@ void add_monitor(CLI::App& app, const GlobalOptions& g, int& exit_code) {
 
 void add_board_commands(CLI::App& app, const GlobalOptions& global, int& exit_code) {
   add_send(app, global, exit_code);
+  add_stream(app, global, exit_code);
   add_move(app, global, exit_code);
   add_home(app, global, exit_code);
   add_stop(app, global, exit_code);

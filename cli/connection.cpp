@@ -109,6 +109,7 @@ std::unique_ptr<Session> connect(const GlobalOptions& o, int& exit_code, LineHan
                      : o.firmware == "seed" ? FirmwareChoice::kSeed
                                             : FirmwareChoice::kDetect;
   options.reply_timeout = Millis{o.timeout_ms};
+  options.baud = o.baud;
   options.interrupted = interrupt_requested;
   if (o.verbose > 0) options.on_send = [](std::string_view line) { std::cerr << "> " << line << '\n'; };
   options.on_line = [verbose = o.verbose > 0, on_line](std::string_view line, const Result<BoardFrame, Diagnostic>& frame) {

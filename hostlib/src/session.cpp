@@ -159,6 +159,7 @@ SessionResult<Done> Session::detect_firmware() {
     if (pending_replies_.empty()) {
       if (attempt > 0) break;
       in_flight_.clear();
+      in_flight_bytes_ = 0;
       firmware_ = Firmware::kSeed;
       mode_ = proto::ChecksumMode::kSum;
       return Done{};
@@ -198,7 +199,8 @@ SessionResult<Done> Session::write_line(const std::string& line, std::optional<C
   if (firmware_ == Firmware::kSeed) {
     if (command) apply_sent(*command);
   } else if (!is_blank(line)) {
-    in_flight_.push_back(std::move(command));
+    in_flight_.push_back(InFlight{std::move(command), line.size() + 1});
+    in_flight_bytes_ += line.size() + 1;
   }
   return Done{};
 }
@@ -231,7 +233,9 @@ SessionResult<std::vector<BoardFrame>> Session::pump(Millis timeout) {
       // The reply to the oldest line in flight: an accepted command changes the model now,
       // before any event that follows it in the stream.
       if (!in_flight_.empty()) {
-        if (in_flight_.front() && std::holds_alternative<Ack>(*frame)) apply_sent(*in_flight_.front());
+        const InFlight& oldest = in_flight_.front();
+        if (oldest.command && std::holds_alternative<Ack>(*frame)) apply_sent(*oldest.command);
+        in_flight_bytes_ -= oldest.bytes;
         in_flight_.pop_front();
       }
       pending_replies_.push_back(*frame);
@@ -416,6 +420,81 @@ SessionResult<Done> Session::listen(Millis duration) {
     pending_replies_.clear();  // nothing was asked: replies here belong to nobody
   }
   return Done{};
+}
+
+SessionResult<Session::StreamReport> Session::stream(const std::vector<Command>& commands, bool pipelined) {
+  StreamReport report;
+  std::vector<std::string> lines;
+  lines.reserve(commands.size());
+  for (size_t i = 0; i < commands.size(); ++i) {
+    Result<std::string, Diagnostic> frame = encode(commands[i], mode_);
+    if (!frame) {
+      SessionError e = make_error(SessionError::Kind::kInvalid,
+                                  "command " + std::to_string(i + 1) + ": " + frame.error().message, frame.error().reason);
+      return e;
+    }
+    lines.push_back(std::move(frame.value()));
+  }
+  if (firmware_ == Firmware::kSeed) {
+    // Nothing comes back: each line goes out once the one before has had its wire time.
+    for (size_t i = 0; i < lines.size(); ++i) {
+      if (interrupted()) return interrupted_error();
+      const Clock::time_point start = Clock::now();
+      if (SessionResult<Done> sent = write_line(lines[i], commands[i]); !sent) return sent.error();
+      ++report.sent;
+      ++report.accepted;
+      const auto wire = std::chrono::duration<double>(static_cast<double>(lines[i].size() + 1) * 10.0 / options_.baud);
+      const Clock::time_point due = start + std::chrono::duration_cast<Clock::duration>(wire);
+      while (Clock::now() < due) {
+        const auto left = std::chrono::duration_cast<Millis>(due - Clock::now());
+        if (SessionResult<std::vector<BoardFrame>> got = pump(std::max(left, Millis{0})); !got) return got.error();
+      }
+    }
+    return report;
+  }
+  const size_t window = version_ && version_->line_max > 0 ? version_->line_max : proto::kLineMax;
+  pending_replies_.clear();
+  std::deque<size_t> waiting;  // indices of this stream's lines not yet answered, oldest first
+  size_t next = 0;
+  Clock::time_point last_reply = Clock::now();
+  while ((!report.refused && next < lines.size()) || !waiting.empty()) {
+    if (interrupted()) return interrupted_error();
+    // Character counting: send while the unanswered bytes leave room for the next line.
+    const auto room = [&] {
+      if (waiting.empty()) return true;
+      return pipelined && in_flight_bytes_ + lines[next].size() + 1 <= window;
+    };
+    while (!report.refused && next < lines.size() && room()) {
+      if (SessionResult<Done> sent = write_line(lines[next], commands[next]); !sent) return sent.error();
+      waiting.push_back(next++);
+      ++report.sent;
+    }
+    if (SessionResult<std::vector<BoardFrame>> got = pump(Millis{5}); !got) return got.error();
+    if (!pending_replies_.empty()) last_reply = Clock::now();
+    while (!pending_replies_.empty() && !waiting.empty()) {
+      const BoardFrame reply = pending_replies_.front();
+      pending_replies_.erase(pending_replies_.begin());
+      const size_t index = waiting.front();
+      waiting.pop_front();
+      if (const Nak* nak = std::get_if<Nak>(&reply)) {
+        if (!report.refused) {
+          report.refused = index;
+          report.why = explain_refusal(nak->reason, &commands[index], model_);
+        } else {
+          report.refused_after.push_back(index);
+        }
+      } else {
+        ++report.accepted;
+      }
+    }
+    if (!waiting.empty() && Clock::now() - last_reply > options_.reply_timeout) {
+      return make_error(SessionError::Kind::kNoReply,
+                        "no reply from the board within " + std::to_string(options_.reply_timeout.count()) +
+                            " ms while streaming (line " + std::to_string(waiting.front() + 1) + " of " +
+                            std::to_string(lines.size()) + " unanswered)");
+    }
+  }
+  return report;
 }
 
 SessionError Session::interrupted_error() {

@@ -263,3 +263,37 @@ TEST_CASE("positions read as full steps") {
   CHECK(hmc::steps_text(-1) == "-0.00390625");
   CHECK(hmc::steps_text(0) == "0");
 }
+
+TEST_CASE("a stream keeps lines in flight, and stops at a refusal with the count of what ran") {
+  StateDir dir;
+  Recorder rec;
+  auto s = open("sim://stream?fast", rec.options());
+  std::vector<hmc::Command> commands;
+  for (uint32_t i = 0; i < 60; ++i) commands.push_back(hmc::LedColor{1 + i % 2, i, 2 * i, 3 * i, 0});
+  auto all = s->stream(commands);
+  REQUIRE(all.ok());
+  CHECK(all->sent == 60);
+  CHECK(all->accepted == 60);
+  CHECK_FALSE(all->refused);
+  CHECK(s->model().strips[1].r == 59);
+
+  // Line 31 moves motor 1 into its pressed... first press it: run it into its reverse switch.
+  REQUIRE(s->execute(StepperMove{1, kRev, 1, 2000, 50}).ok());
+  REQUIRE(s->wait_until_idle({1}).ok());
+  commands.clear();
+  for (uint32_t i = 0; i < 30; ++i) commands.push_back(hmc::ServoMove{1, 10 + i});
+  commands.push_back(StepperMove{1, kRev, 16, 10, 100});  // toward the pressed switch: refused
+  for (uint32_t i = 0; i < 30; ++i) commands.push_back(hmc::ServoMove{2, 10 + i});
+  const size_t before = rec.sent.size();
+  auto stopped = s->stream(commands);
+  REQUIRE(stopped.ok());
+  REQUIRE(stopped->refused);
+  CHECK(*stopped->refused == 30);
+  CHECK(stopped->why.find("reverse end is pressed") != std::string::npos);
+  CHECK(stopped->accepted == stopped->sent - 1);  // every other line sent was carried out
+  CHECK(stopped->sent > 31);                      // lines were in flight behind the refused one
+  CHECK(stopped->sent < 61);                      // ... but the stream stopped there
+  CHECK(rec.sent.size() - before == stopped->sent);
+  // Pipelined: with 22-byte lines and a 128-byte window, several lines wait for their answers.
+  CHECK(stopped->sent - 31 >= 3);
+}

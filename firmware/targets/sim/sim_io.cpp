@@ -5,6 +5,8 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <netdb.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/socket.h>
@@ -139,6 +141,9 @@ std::optional<Accepted> accept_client(int listen_fd) {
   Fd fd(accept4(listen_fd, reinterpret_cast<sockaddr*>(&peer), &length,
                 SOCK_NONBLOCK | SOCK_CLOEXEC));
   if (fd.get() < 0) return std::nullopt;
+  // Bytes go out as the board sends them, a few at a time, as on a serial line: no coalescing.
+  const int one = 1;
+  setsockopt(fd.get(), IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
   std::string from = endpoint_text(reinterpret_cast<sockaddr*>(&peer), length);
   return Accepted{std::move(fd), std::move(from)};
 }

@@ -84,6 +84,7 @@ struct BoardModel {
 struct SessionOptions {
   FirmwareChoice firmware = FirmwareChoice::kDetect;
   Millis reply_timeout{1000};  // longest wait for one reply
+  uint32_t baud = kDefaultBaud;  // the line's speed: the seed firmware is paced by it
   // Polled while waiting; returning true interrupts the wait and stops every motor.
   std::function<bool()> interrupted;
   // Every line the board sends, decoded or not, as it arrives (monitor, --verbose).
@@ -132,6 +133,23 @@ class Session {
   // Reads and handles what the board sends for `duration`, or until interrupted.
   SessionResult<Done> listen(Millis duration);
 
+  // Sends many commands as fast as the link allows and matches the replies in order. With our
+  // firmware, lines go out while earlier ones are still unanswered, as long as the unanswered
+  // bytes fit the board's line buffer (VER's line_max: the board's receive ring is larger, so
+  // it can never overflow) — the link never waits for a reply. The commands are checked
+  // against the protocol's ranges before anything is sent; the board's rules are the board's to
+  // apply while streaming. At the first refusal nothing more is sent, the lines already on
+  // their way are answered and counted, and the report says which line was refused and why.
+  // With the seed firmware, one line at a time, each after the previous one's wire time.
+  struct StreamReport {
+    size_t sent = 0;       // lines written
+    size_t accepted = 0;   // lines the board accepted (seed: lines sent)
+    std::optional<size_t> refused;  // index of the first refused command
+    std::string why;       // its refusal, explained
+    std::vector<size_t> refused_after;  // lines sent after it that the board refused too
+  };
+  SessionResult<StreamReport> stream(const std::vector<Command>& commands, bool pipelined = true);
+
  private:
   Session(std::unique_ptr<Transport> transport, const SessionOptions& options);
   SessionResult<Done> detect();
@@ -164,7 +182,12 @@ class Session {
   proto::ChecksumMode mode_ = proto::ChecksumMode::kSum;
   BoardModel model_;
   LineSplitter splitter_;
-  std::deque<std::optional<Command>> in_flight_;  // lines sent, oldest first, awaiting replies
+  struct InFlight {
+    std::optional<Command> command;  // what the line carries, when it decoded
+    size_t bytes = 0;                // its length on the wire, line end included
+  };
+  std::deque<InFlight> in_flight_;  // lines sent, oldest first, awaiting replies
+  size_t in_flight_bytes_ = 0;
   std::vector<BoardFrame> pending_replies_;       // replies read, not yet taken
   bool rebooted_ = false;                     // EVB seen since the last wait began
   bool detecting_ = false;                    // open(): the board's checksum mode is not known yet

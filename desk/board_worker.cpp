@@ -1,0 +1,354 @@
+// BoardWorker: the session's thread. Every call into libhmc happens here; the panel only posts
+// requests and copies snapshots.
+#include "board_worker.h"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "hmc/motion_file.h"
+#include "hmc/motion_runner.h"
+#include "hmc/transport.h"
+
+namespace hmc::desk {
+namespace {
+
+constexpr Millis kListenSlice{50};     // how long the worker listens between requests
+constexpr Millis kRefreshEvery{200};   // status re-read while connected
+
+std::string version_text(const Version& v) {
+  return std::to_string(v.firmware / 10000) + "." + std::to_string(v.firmware / 100 % 100) + "." +
+         std::to_string(v.firmware % 100) + ", protocol " + std::to_string(v.protocol) + (v.legacy ? ", legacy rules" : "");
+}
+
+uint32_t delay_of(uint32_t rate) {
+  return static_cast<uint32_t>(std::max<long>(1, std::lround(1e6 / std::max<uint32_t>(rate, 1))));
+}
+
+}  // namespace
+
+BoardWorker::BoardWorker() : thread_([this] { loop(); }) {}
+
+BoardWorker::~BoardWorker() {
+  quit_ = true;
+  stop_requested_ = true;  // ends a running file or a wait, stopping the motors
+  wake_.notify_all();
+  thread_.join();
+}
+
+void BoardWorker::post(Request request) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    queue_.push_back(std::move(request));
+    snap_.busy = true;
+  }
+  wake_.notify_all();
+}
+
+void BoardWorker::stop_all() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    // What was queued behind the stop would start motors again: only link changes survive.
+    std::deque<Request> kept;
+    for (Request& r : queue_) {
+      if (r.kind == Request::Kind::kConnect || r.kind == Request::Kind::kDisconnect) kept.push_back(std::move(r));
+    }
+    queue_ = std::move(kept);
+  }
+  stop_requested_ = true;
+  wake_.notify_all();
+}
+
+Snapshot BoardWorker::snapshot() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return snap_;
+}
+
+void BoardWorker::log(LogLine::Kind kind, std::string text) {
+  const double t = std::chrono::duration<double>(Clock::now() - started_).count();
+  std::lock_guard<std::mutex> lock(mutex_);
+  snap_.log.push_back(LogLine{kind, t, std::move(text)});
+  if (snap_.log.size() > kLogLimit) snap_.log.erase(snap_.log.begin());
+  ++snap_.log_serial;
+}
+
+void BoardWorker::publish() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (session_) snap_.model = session_->model();
+  snap_.busy = !queue_.empty();
+}
+
+void BoardWorker::loop() {
+  while (!quit_) {
+    if (stop_requested_.exchange(false) && session_) {
+      // The wait that saw the flag has stopped every motor already; once more costs three
+      // short frames and covers a flag raised between waits.
+      if (SessionResult<Done> stopped = session_->stop_all(); !stopped) {
+        report(stopped.error(), "stop all");
+      } else {
+        log(LogLine::Kind::kInfo, "STOP ALL: every motor was sent a stop");
+      }
+      publish();
+    }
+    std::optional<Request> request;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      if (queue_.empty() && !session_) wake_.wait_for(lock, kListenSlice);
+      if (!queue_.empty()) {
+        request = std::move(queue_.front());
+        queue_.pop_front();
+        snap_.busy = true;
+      }
+    }
+    if (quit_) break;
+    if (request) {
+      handle(*request);
+      publish();
+      continue;
+    }
+    if (!session_) continue;
+    if (SessionResult<Done> heard = session_->listen(kListenSlice); !heard) {
+      report(heard.error(), "listening");
+      continue;
+    }
+    if (session_ && Clock::now() - last_refresh_ >= kRefreshEvery) {
+      last_refresh_ = Clock::now();
+      quiet_ = true;  // the status queries are not worth a log line each
+      SessionResult<Done> refreshed = session_->refresh();
+      quiet_ = false;
+      if (!refreshed) report(refreshed.error(), "reading the status");
+    }
+    publish();
+  }
+  if (session_) {
+    (void)session_->stop_all();
+    session_.reset();
+  }
+}
+
+void BoardWorker::handle(const Request& q) {
+  using K = Request::Kind;
+  if (q.kind == K::kConnect) return connect(q);
+  if (q.kind == K::kDisconnect) return disconnect("disconnected");
+  if (q.kind == K::kOpenFile) return open_file(q.text);
+  if (!session_) {
+    log(LogLine::Kind::kError, "not connected: connect to a board first");
+    return;
+  }
+  const uint32_t m = std::clamp<uint32_t>(q.unit, 1, proto::kMotorCount);
+  const uint32_t microstep = session_->model().motor(m).microstep;
+  const bool v2 = session_->firmware() == Firmware::kV2;
+  // The acceleration the board ramps with (v2 only), sent when it changes.
+  auto set_accel = [&]() -> bool {
+    if (!v2 || (accel_sent_[m - 1] && *accel_sent_[m - 1] == q.accel)) return true;
+    SessionResult<BoardFrame> set = session_->execute(SetSetting{m, proto::kSettingAccel, q.accel});
+    if (!set) {
+      report(set.error(), "motor " + std::to_string(m) + " acceleration");
+      return false;
+    }
+    accel_sent_[m - 1] = q.accel;
+    return true;
+  };
+  switch (q.kind) {
+    case K::kMove: {
+      if (q.steps == 0 || !set_accel()) return;
+      const uint32_t dir = q.steps < 0 ? proto::kActionReverse : proto::kActionForward;
+      const auto steps = static_cast<uint32_t>(std::min<int64_t>(std::llabs(q.steps), 2147483647));
+      send(StepperMove{m, dir, microstep, steps, delay_of(q.rate)},
+           "motor " + std::to_string(m) + ": move " + std::to_string(q.steps) + " steps at " + std::to_string(q.rate) +
+               " steps/s");
+      return;
+    }
+    case K::kRun:
+      if (!set_accel()) return;
+      send(StepperMove{m, q.reverse ? proto::kActionReverse : proto::kActionForward, microstep, 0, delay_of(q.rate)},
+           "motor " + std::to_string(m) + ": run " + (q.reverse ? "reverse" : "forward") + " until stopped");
+      return;
+    case K::kHome:
+      send(StepperMove{m, proto::kActionHome, 0, 0, 0}, "motor " + std::to_string(m) + ": home");
+      return;
+    case K::kStop:
+      send(StepperMove{m, proto::kActionStop, 0, 0, 0}, "motor " + std::to_string(m) + ": stop");
+      return;
+    case K::kServo:
+      send(ServoMove{q.unit, q.angle}, "servo " + std::to_string(q.unit) + ": " + std::to_string(q.angle) + "°");
+      return;
+    case K::kLed:
+      send(LedColor{q.unit, q.r, q.g, q.b, q.w}, "LED strip " + std::to_string(q.unit) + ": " + std::to_string(q.r) + " " +
+                                                     std::to_string(q.g) + " " + std::to_string(q.b) + " " +
+                                                     std::to_string(q.w));
+      return;
+    case K::kRunFile: run_file(); return;
+    default: return;
+  }
+}
+
+void BoardWorker::connect(const Request& q) {
+  if (session_) disconnect("disconnected");
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    snap_.link = LinkState::kConnecting;
+    snap_.port = q.text;
+  }
+  log(LogLine::Kind::kInfo, "connecting to " + q.text + " at " + std::to_string(q.baud) + " baud");
+  PortOptions port_options;
+  port_options.baud = q.baud;
+  Result<std::unique_ptr<Transport>> port = open_port(q.text, port_options);
+  if (!port) {
+    log(LogLine::Kind::kError, port.error().message);
+    std::lock_guard<std::mutex> lock(mutex_);
+    snap_.link = LinkState::kFailed;
+    return;
+  }
+  SessionOptions options;
+  options.interrupted = [this] { return stop_requested_.load(); };
+  options.on_send = [this](std::string_view line) {
+    if (!quiet_) log(LogLine::Kind::kSent, "> " + std::string(line));
+  };
+  options.on_line = [this](std::string_view line, const Result<BoardFrame, Diagnostic>& frame) {
+    const bool event = frame && is_event(*frame);
+    if (quiet_ && !event) return;
+    log(event ? LogLine::Kind::kEvent : LogLine::Kind::kReply, "< " + std::string(line));
+  };
+  SessionResult<std::unique_ptr<Session>> session = Session::open(std::move(*port), options);
+  stop_requested_ = false;  // a STOP ALL during the connection has nothing left to stop
+  if (!session) {
+    log(LogLine::Kind::kError, session.error().message);
+    std::lock_guard<std::mutex> lock(mutex_);
+    snap_.link = LinkState::kFailed;
+    return;
+  }
+  session_ = std::move(*session);
+  for (auto& a : accel_sent_) a.reset();
+  last_refresh_ = Clock::now();
+  log(LogLine::Kind::kInfo, "connected: " + session_->description());
+  std::lock_guard<std::mutex> lock(mutex_);
+  snap_.link = LinkState::kConnected;
+  snap_.description = session_->description();
+  snap_.firmware = session_->firmware();
+  snap_.firmware_version = session_->version() ? version_text(*session_->version())
+                                               : std::string("seed firmware (no replies; positions are timed)");
+  snap_.model = session_->model();
+}
+
+void BoardWorker::disconnect(const std::string& why) {
+  if (!session_) return;
+  session_.reset();  // closes the port (a simulated board keeps its state)
+  log(LogLine::Kind::kInfo, why);
+  std::lock_guard<std::mutex> lock(mutex_);
+  snap_.link = LinkState::kDisconnected;
+  snap_.firmware.reset();
+  snap_.firmware_version.clear();
+  snap_.description.clear();
+}
+
+void BoardWorker::send(const Command& command, const std::string& what) {
+  log(LogLine::Kind::kInfo, what);
+  SessionResult<BoardFrame> reply = session_->execute(command);
+  if (!reply) report(reply.error(), what);
+}
+
+void BoardWorker::report(const SessionError& error, const std::string& what) {
+  using K = SessionError::Kind;
+  const char* kind = error.kind == K::kNak        ? "the board refused"
+                     : error.kind == K::kRefused  ? "refused"
+                     : error.kind == K::kInvalid  ? "invalid"
+                     : error.kind == K::kInterrupted ? "stopped"
+                     : error.kind == K::kNoReply  ? "no reply"
+                                                  : "link";
+  log(error.kind == K::kInterrupted ? LogLine::Kind::kInfo : LogLine::Kind::kError,
+      what + ": " + kind + ": " + error.message);
+  if (error.kind == K::kLink || error.kind == K::kNoReply) {
+    disconnect("connection lost");
+    std::lock_guard<std::mutex> lock(mutex_);
+    snap_.link = LinkState::kFailed;
+  }
+}
+
+void BoardWorker::open_file(const std::string& path) {
+  LoadedFile loaded;
+  loaded.path = path;
+  auto file = motion::load_motion_file(path);
+  if (!file) {
+    for (const motion::FileError& e : file.error()) loaded.errors.push_back(e.text());
+  } else {
+    motion::PlanOptions options;
+    if (session_) {
+      options.firmware = session_->firmware() == Firmware::kSeed ? motion::TargetFirmware::kSeed : motion::TargetFirmware::kV2;
+      if (session_->firmware() == Firmware::kV2) {
+        // Absolute moves start from where the board says each motor is.
+        for (const motion::MotorConfig& mc : file->motors) {
+          const MotorStatus& status = session_->model().motor(mc.motor);
+          options.start_position[mc.motor - 1] =
+              static_cast<int64_t>(std::llround(static_cast<double>(status.position) * mc.microstep / 256.0));
+        }
+      }
+    }
+    auto plan = motion::plan_motion(*file, options);
+    if (!plan) {
+      for (const motion::FileError& e : plan.error()) loaded.errors.push_back(e.text());
+    } else {
+      loaded.plan = std::make_shared<const motion::Plan>(std::move(*plan));
+    }
+  }
+  log(loaded.errors.empty() ? LogLine::Kind::kInfo : LogLine::Kind::kError,
+      path + (loaded.errors.empty() ? ": valid, " + std::to_string(loaded.plan->actions.size()) + " steps, " +
+                                          std::to_string(loaded.plan->duration_s) + " s"
+                                    : ": " + std::to_string(loaded.errors.size()) + " error(s)"));
+  std::lock_guard<std::mutex> lock(mutex_);
+  snap_.file = std::move(loaded);
+}
+
+void BoardWorker::run_file() {
+  std::string path;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    path = snap_.file.path;
+  }
+  if (path.empty()) {
+    log(LogLine::Kind::kError, "run: open a motion file first");
+    return;
+  }
+  open_file(path);  // planned again from where the motors are now
+  std::shared_ptr<const motion::Plan> plan;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    plan = snap_.file.plan;
+    snap_.running = true;
+    snap_.run_done = 0;
+    snap_.run_total = plan ? plan->actions.size() : 0;
+    snap_.run_action.clear();
+  }
+  if (!plan) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    snap_.running = false;
+    return;
+  }
+  log(LogLine::Kind::kInfo, "running " + path);
+  motion::RunOptions options;
+  options.on_event = [this](const motion::RunEvent& e) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (e.kind == motion::RunEvent::Kind::kActionDone && e.action) snap_.run_done = e.action->index;
+      if (e.kind == motion::RunEvent::Kind::kActionStarted && e.action) snap_.run_action = e.action->description;
+      snap_.run_elapsed_s = e.elapsed_s;
+      snap_.run_remaining_s = e.remaining_s;
+    }
+    if (e.kind == motion::RunEvent::Kind::kActionStarted && e.action) {
+      log(LogLine::Kind::kInfo, "step " + std::to_string(e.action->index) + "/" + std::to_string(e.total) + ": " +
+                                    e.action->description);
+    }
+    publish();
+  };
+  motion::MotionRunner runner(*session_, *plan);
+  const motion::RunReport outcome = runner.run(options);
+  if (outcome.error) {
+    report(*outcome.error, "run stopped at step " + std::to_string(outcome.stopped_at));
+  } else {
+    log(LogLine::Kind::kInfo, "run done: " + std::to_string(outcome.completed) + " steps");
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  snap_.running = false;
+}
+
+}  // namespace hmc::desk

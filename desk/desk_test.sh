@@ -1,0 +1,117 @@
+#!/usr/bin/env bash
+# desk_test: drives hmc-desk through its own widgets on a virtual display (Xvfb) against the
+# simulated board, then checks what the board did (its trace) and the screenshots.
+# Usage: desk/desk_test.sh PATH/TO/hmc-desk   (ctest runs it as desk_test)
+set -euo pipefail
+
+desk=${1:?usage: desk_test.sh PATH/TO/hmc-desk}
+source_dir=$(cd "$(dirname "$0")/.." && pwd)
+if ! command -v Xvfb >/dev/null; then
+  echo "desk_test: skipped: Xvfb is not installed (scripts/setup installs xvfb)"
+  exit 0
+fi
+
+work=$(mktemp -d)
+xvfb_pid=""
+cleanup() {
+  [[ -n "$xvfb_pid" ]] && kill "$xvfb_pid" 2>/dev/null && wait "$xvfb_pid" 2>/dev/null
+  rm -rf "$work"
+}
+trap cleanup EXIT
+fail() {
+  echo "desk_test: FAIL: $*" >&2
+  exit 1
+}
+
+# A free display: one with no lock file and no socket.
+display=""
+for n in $(seq 90 120); do
+  if [[ ! -e /tmp/.X$n-lock && ! -e /tmp/.X11-unix/X$n ]]; then
+    display=":$n"
+    break
+  fi
+done
+[[ -n "$display" ]] || fail "no free X display number in :90-:120"
+Xvfb "$display" -screen 0 1280x800x24 -nolisten tcp >"$work/xvfb.log" 2>&1 &
+xvfb_pid=$!
+for _ in $(seq 50); do
+  [[ -e /tmp/.X11-unix/X${display#:} ]] && break
+  sleep 0.1
+done
+[[ -e /tmp/.X11-unix/X${display#:} ]] || fail "Xvfb did not start: $(cat "$work/xvfb.log")"
+
+trace="$work/trace.jsonl"
+mkdir -p "$work/state" "$work/shots"
+cat >"$work/script.txt" <<EOF
+# Open a motion file (only planned), connect, and look.
+open $source_dir/examples/camera-slider.json
+connect
+wait-for connected 5000
+wait 400
+screenshot connected
+# Motor 1 +100 steps with the jog button, then LED strip 1 orange-red.
+jog 1 +100
+wait 300
+wait-for idle 3000
+led 1 255 64 0 0
+wait 500
+screenshot jog-led
+# Motor 2 runs while "hold fwd >>" is held, and stops when it is let go.
+hold "motor 2/hold fwd >>"
+wait 300
+release "motor 2/hold fwd >>"
+wait-for idle 3000
+# A long move on motor 3 (20 s at 2000 steps/s), stopped by STOP ALL mid-move.
+set "motor 3/speed" 2000
+move 3 40000
+wait 800
+screenshot moving
+press STOP ALL
+wait 300
+wait-for idle 3000
+wait 300
+screenshot stopped
+quit
+EOF
+
+start=$(date +%s)
+HMC_SIM_STATE="$work/state" DISPLAY="$display" timeout 60 "$desk" \
+  --port "sim://desktest?fresh&trace=$trace" --script "$work/script.txt" --screenshot-dir "$work/shots" \
+  >"$work/desk.log" 2>&1 || fail "hmc-desk failed: $(cat "$work/desk.log")"
+echo "desk_test: hmc-desk ran the script in $(($(date +%s) - start)) s"
+[[ -s "$trace" ]] || fail "no trace written"
+
+# Trace times are the board's 48 MHz ticks.
+ticks_per_ms=48000
+
+steps1=$(grep -c '"ev":"step","motor":1,' "$trace" || true)
+[[ "$steps1" == 100 ]] || fail "motor 1 made $steps1 steps, not 100"
+
+grep -q '"ev":"led","strip":1,"r":255,"g":64,"b":0,"w":0' "$trace" || fail "LED strip 1 never showed 255 64 0 0"
+
+steps2=$(grep -c '"ev":"step","motor":2,' "$trace" || true)
+((steps2 > 0 && steps2 < 1500)) || fail "motor 2 made $steps2 steps while held for 0.3 s at 1000 steps/s"
+
+steps3=$(grep -c '"ev":"step","motor":3,' "$trace" || true)
+[[ "$steps3" -gt 100 ]] || fail "motor 3 made only $steps3 steps: the long move did not start"
+[[ "$steps3" -lt 40000 ]] || fail "motor 3 finished its move: STOP ALL came too late"
+stop_t=$(grep -m1 '"ev":"rx","line":"STX#6#STM#3#0#0#0#0#3#ETX"' "$trace" | sed -E 's/^\{"t":([0-9]+),.*/\1/')
+[[ -n "$stop_t" ]] || fail "motor 3's stop frame never arrived"
+last3=$(grep '"ev":"step","motor":3,' "$trace" | tail -n 1 | sed -E 's/^\{"t":([0-9]+),.*/\1/')
+late=$((last3 - stop_t))
+((late <= ticks_per_ms)) || fail "motor 3 stepped $((late / 48)) µs after its stop frame"
+echo "desk_test: motor 1: $steps1 steps; motor 2 (held): $steps2; motor 3: $steps3 steps, its last step $((late / 48)) µs from its stop frame (limit +1000)"
+
+for shot in connected jog-led moving stopped; do
+  png="$work/shots/$shot.png"
+  [[ -s "$png" ]] || fail "no screenshot $shot.png"
+  # The PNG header: width and height, big-endian, at bytes 16-23.
+  size=$(od -An -tu1 -j16 -N8 "$png" | awk '{printf "%d %d", $1*16777216+$2*65536+$3*256+$4, $5*16777216+$6*65536+$7*256+$8}')
+  [[ "$size" == "1280 800" ]] || fail "$shot.png is $size, not 1280 800"
+  if command -v convert >/dev/null; then
+    spread=$(convert "$png" -format '%[fx:standard_deviation]' info:)
+    awk -v s="$spread" 'BEGIN { exit !(s > 0.01) }' || fail "$shot.png is blank (standard deviation $spread)"
+  fi
+done
+[[ -n "${DESK_TEST_KEEP:-}" ]] && cp "$work"/shots/*.png "$DESK_TEST_KEEP"/
+echo "desk_test: screenshots 1280x800, not blank; done in $(($(date +%s) - start)) s"
