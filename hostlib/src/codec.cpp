@@ -100,6 +100,15 @@ Result<std::string, Diagnostic> encode(const Command& command, proto::ChecksumMo
   return g::write_frame(shape_of(command), v.values.data(), mode);
 }
 
+Result<std::size_t, Diagnostic> encode_into(const Command& command, std::string& out, proto::ChecksumMode mode) {
+  auto valid = validate(command);
+  if (!valid) return valid.error();
+  const CommandValues v = command_values(command);
+  out.clear();
+  g::append_frame(out, shape_of(command), v.values.data(), mode);
+  return out.size();
+}
+
 Result<Command, Diagnostic> parse_input(std::string_view text, proto::ChecksumMode mode) {
   std::size_t lead = 0;
   const std::string_view body = g::strip_blanks(text, lead);

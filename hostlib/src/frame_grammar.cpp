@@ -392,19 +392,38 @@ std::array<std::size_t, proto::kMaxValues> canonical_offsets(const Shape& shape,
   return offsets;
 }
 
-std::string frame_head(const Shape& shape, const uint32_t* values) {
-  std::string out;
-  out.reserve(64);
+namespace {
+
+// Decimal digits of `n` appended without a temporary string.
+void append_number(std::string& out, uint32_t n, std::size_t min_digits = 1) {
+  char digits[10];
+  std::size_t count = 0;
+  do {
+    digits[count++] = static_cast<char>('0' + n % 10);
+    n /= 10;
+  } while (n != 0);
+  for (std::size_t i = count; i < min_digits; ++i) out += '0';
+  while (count > 0) out += digits[--count];
+}
+
+}  // namespace
+
+void append_frame_head(std::string& out, const Shape& shape, const uint32_t* values) {
   out += kStart;
   out += '#';
-  out += std::to_string(shape.value_count + 1);
+  append_number(out, shape.value_count + 1);
   out += '#';
   out += shape.name;
   for (uint32_t i = 0; i < shape.value_count; ++i) {
     out += '#';
-    out += std::to_string(values[i]);
+    append_number(out, values[i]);
   }
   out += '#';
+}
+
+std::string frame_head(const Shape& shape, const uint32_t* values) {
+  std::string out;
+  append_frame_head(out, shape, values);
   return out;
 }
 
@@ -413,16 +432,27 @@ uint32_t checksum_of(const Shape& shape, const uint32_t* values, proto::Checksum
 }
 
 std::string crc_text(uint32_t crc) {
-  std::string digits = std::to_string(crc);
-  if (digits.size() < proto::kCrcDigits) digits.insert(0, proto::kCrcDigits - digits.size(), '0');
+  std::string digits;
+  append_number(digits, crc, proto::kCrcDigits);
   return digits;
 }
 
-std::string write_frame(const Shape& shape, const uint32_t* values, proto::ChecksumMode mode) {
-  std::string out = frame_head(shape, values);
-  out += mode == proto::ChecksumMode::kCrc16 ? crc_text(crc_of(out)) : std::to_string(sum_of(values, shape.value_count));
+void append_frame(std::string& out, const Shape& shape, const uint32_t* values, proto::ChecksumMode mode) {
+  const std::size_t start = out.size();
+  append_frame_head(out, shape, values);
+  if (mode == proto::ChecksumMode::kCrc16) {
+    append_number(out, crc_of(std::string_view(out).substr(start)), proto::kCrcDigits);
+  } else {
+    append_number(out, sum_of(values, shape.value_count));
+  }
   out += '#';
   out += kEnd;
+}
+
+std::string write_frame(const Shape& shape, const uint32_t* values, proto::ChecksumMode mode) {
+  std::string out;
+  out.reserve(64);
+  append_frame(out, shape, values, mode);
   return out;
 }
 

@@ -64,6 +64,11 @@ std::vector<Warning> lint(const Command& command);
 // The canonical frame for a command, without a line terminator; refuses an invalid command.
 Result<std::string, Diagnostic> encode(const Command& command, proto::ChecksumMode mode = proto::ChecksumMode::kSum);
 
+// encode() into `out` (cleared first), for loops that frame many commands: no allocation once
+// `out` has room for a frame. Returns the frame's length.
+Result<std::size_t, Diagnostic> encode_into(const Command& command, std::string& out,
+                                            proto::ChecksumMode mode = proto::ChecksumMode::kSum);
+
 // A command as a person types it: a frame (`STX#...#ETX`) or command-set notation
 // (`[#NAME#v1#...#vn]`, blanks around allowed; it has no checksum). Offsets refer to `text`.
 Result<Command, Diagnostic> parse_input(std::string_view text, proto::ChecksumMode mode = proto::ChecksumMode::kSum);
