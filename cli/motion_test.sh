@@ -12,44 +12,8 @@ fi
 hmc=$(realpath "$1")
 sim=$(realpath "$2")
 src=$(realpath "$3")
-work=$(mktemp -d)
-cd "$work" || exit 1
-export HMC_SIM_STATE=$work/state
-unset HMC_PORT
-failures=0
-sim_pid=
-
-cleanup() {
-  [[ -n $sim_pid ]] && kill -9 "$sim_pid" 2>/dev/null
-  wait 2>/dev/null
-  rm -rf "$work"
-}
-trap cleanup EXIT
-
-fail() {
-  failures=$((failures + 1))
-  printf 'FAIL %s\n' "$*"
-}
-
-# Starts hmc-sim on a free TCP port with a trace; sets $port.
-start_sim() {
-  "$sim" --tcp 127.0.0.1:0 --no-self-test --trace "$work/trace.jsonl" "$@" 2>"$work/sim.err" &
-  sim_pid=$!
-  for _ in $(seq 100); do
-    port=$(grep -o 'tcp://[0-9.:]*' "$work/sim.err" | head -1)
-    [[ -n $port ]] && return 0
-    sleep 0.05
-  done
-  fail "hmc-sim did not start: $(cat "$work/sim.err")"
-  exit 1
-}
-
-# Stops hmc-sim cleanly, so its trace is complete.
-stop_sim() {
-  kill -TERM "$sim_pid" 2>/dev/null
-  wait "$sim_pid" 2>/dev/null
-  sim_pid=
-}
+# shellcheck source=sim_test_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/sim_test_lib.sh"
 
 # --- check, plan, dry run ---------------------------------------------------------------------
 for f in "$src"/examples/*.json; do
@@ -145,8 +109,4 @@ status=$("$hmc" --port "$port" status --json 2>&1)
 [[ $(pos 3) == 0 ]] || fail "after resuming, the slider ends at $(pos 3), want 0 (where the file leaves it)"
 stop_sim
 
-if ((failures > 0)); then
-  echo "motion_test: $failures failures"
-  exit 1
-fi
-echo "motion_test: all checks passed"
+finish motion_test

@@ -12,29 +12,10 @@ fi
 hmc=$(realpath "$1")
 sim=$(realpath "$2")
 src=$(realpath "$3")
-work=$(mktemp -d)
-cd "$work" || exit 1
-failures=0
-sim_pid=
-cleanup() {
-  [[ -n $sim_pid ]] && kill -9 "$sim_pid" 2>/dev/null
-  wait 2>/dev/null
-  rm -rf "$work"
-}
-trap cleanup EXIT
-fail() {
-  failures=$((failures + 1))
-  printf 'FAIL %s\n' "$*"
-}
+# shellcheck source=sim_test_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/sim_test_lib.sh"
 
-"$sim" --tcp 127.0.0.1:0 --no-self-test --baud 115200 --trace "$work/trace.jsonl" 2>"$work/sim.err" &
-sim_pid=$!
-for _ in $(seq 100); do
-  port=$(grep -o 'tcp://[0-9.:]*' "$work/sim.err" | head -1)
-  [[ -n $port ]] && break
-  sleep 0.05
-done
-[[ -n $port ]] || { fail "hmc-sim did not start"; exit 1; }
+start_sim --baud 115200
 
 # 200 mixed frames, all accepted.
 head -200 "$src/bench/mixed-2000.txt" >clean.txt
@@ -58,9 +39,7 @@ grep -Eq 'refused.txt:41 \(command 41\) was refused: motor 1.s limit switch at t
 grep -Eq 'the 40 commands before it were carried out; [1-9][0-9]* more were already on their way' <<<"$out" ||
   fail "what ran is not reported: $out"
 sent=$(grep -o 'streamed [0-9]* of 81' <<<"$out" | grep -o '[0-9]* of' | grep -o '[0-9]*')
-kill -TERM "$sim_pid"
-wait "$sim_pid" 2>/dev/null
-sim_pid=
+stop_sim
 # The board received exactly the lines sent: the 40 before the refused one, it, and those
 # already on their way — nothing after.
 counts=$(python3 - "$work/trace.jsonl" <<'PY'
@@ -81,8 +60,4 @@ read -r before after <<<"$counts"
 [[ $after == $((sent - 41)) ]] || fail "the board received $after lines after the refused one; hmc says it sent $((sent - 41))"
 (( sent < 81 && sent > 41 )) || fail "the stream did not stop at the refusal with lines in flight: $sent lines sent"
 
-if ((failures > 0)); then
-  echo "stream_test: $failures failures"
-  exit 1
-fi
-echo "stream_test: all checks passed ($sent of 81 lines sent, $((sent - 41)) after the refused one)"
+finish stream_test "$sent of 81 lines sent, $((sent - 41)) after the refused one"
