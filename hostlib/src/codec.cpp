@@ -57,9 +57,9 @@ Result<Decoded, Diagnostic> decode(std::string_view line, proto::ChecksumMode mo
 Result<Command, Diagnostic> validate(const Command& command) {
   const g::Shape& shape = shape_of(command);
   const CommandValues v = command_values(command);
+  if (!g::check_values(shape, v.values.data(), nullptr)) return command;
   const auto offsets = g::canonical_offsets(shape, v.values.data());
-  if (auto refusal = g::check_values(shape, v.values.data(), offsets.data())) return std::move(*refusal);
-  return command;
+  return std::move(*g::check_values(shape, v.values.data(), offsets.data()));
 }
 
 std::vector<Warning> lint(const Command& command) {

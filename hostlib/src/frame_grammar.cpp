@@ -352,7 +352,7 @@ std::optional<Diagnostic> check_values(const Shape& shape, const uint32_t* value
     if (v == 0 && (f.flags & proto::kZeroAllowedOnHome) && homing) continue;
     uint32_t min = f.min;
     uint32_t max = f.max;
-    std::string setting_name;
+    const char* setting_name = nullptr;
     if ((f.flags & proto::kSettingValue) && i > 0 && values[i - 1] >= 1 && values[i - 1] <= proto::kSettingCount) {
       const proto::SettingSpec& s = proto::kSettings[values[i - 1] - 1];
       min = s.min;
@@ -361,8 +361,9 @@ std::optional<Diagnostic> check_values(const Shape& shape, const uint32_t* value
     }
     const bool in_range = v >= min && v <= max && (!(f.flags & proto::kPowerOfTwo) || proto::is_power_of_two(v));
     if (in_range) continue;
+    if (offsets == nullptr) return refuse(proto::Reason::kOutOfRange, 0, 0, "", "");  // the caller asks again
     std::string message = std::string(f.name) + " is " + std::to_string(v) + ": expected ";
-    if (!setting_name.empty()) {
+    if (setting_name != nullptr) {
       message += std::to_string(min) + "-" + std::to_string(max) + " for setting " + std::to_string(values[i - 1]) +
                  " (" + setting_name + ")";
     } else {
@@ -373,6 +374,7 @@ std::optional<Diagnostic> check_values(const Shape& shape, const uint32_t* value
                   std::move(message), 0, v);
   }
   if (homing && !proto::motor_has_switches(values[0])) {
+    if (offsets == nullptr) return refuse(proto::Reason::kNoSwitch, 0, 0, "", "");
     return refuse(proto::Reason::kNoSwitch, proto::kTokenFirstValue, offsets[0], shape.fields[0].name,
                   "motor " + std::to_string(values[0]) +
                       " has no limit switch to home against; only motors with switches (1 and 2) can home");
@@ -383,11 +385,18 @@ std::optional<Diagnostic> check_values(const Shape& shape, const uint32_t* value
 std::array<std::size_t, proto::kMaxValues> canonical_offsets(const Shape& shape, const uint32_t* values) {
   // "STX#<len>#<NAME>#v1#v2...".
   std::array<std::size_t, proto::kMaxValues> offsets{};
-  std::size_t at = kStart.size() + 1 + std::to_string(shape.value_count + 1).size() + 1 +
-                   std::string_view(shape.name).size() + 1;
+  const auto digits = [](uint32_t n) {
+    std::size_t count = 1;
+    while (n >= 10) {
+      n /= 10;
+      ++count;
+    }
+    return count;
+  };
+  std::size_t at = kStart.size() + 1 + digits(shape.value_count + 1) + 1 + std::string_view(shape.name).size() + 1;
   for (uint32_t i = 0; i < shape.value_count; ++i) {
     offsets[i] = at;
-    at += std::to_string(values[i]).size() + 1;
+    at += digits(values[i]) + 1;
   }
   return offsets;
 }

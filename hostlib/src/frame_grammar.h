@@ -66,6 +66,9 @@ Result<Frame, Diagnostic> parse_frame(std::string_view line, proto::ChecksumMode
 
 // Steps 15-16: ranges left to right under the action's exemptions and the setting's range, then
 // the switch rule. `offsets[i]` is where value i starts in the text the diagnostic refers to.
+// Steps 15-16 of the order of checks. `offsets` (of each value in the line) name where a refusal
+// is; null asks only whether there is one (no message is built): the fast path of a frame
+// that is valid, whose caller asks again with offsets when it is not.
 std::optional<Diagnostic> check_values(const Shape& shape, const uint32_t* values, const std::size_t* offsets);
 
 // Where each value starts in the canonical frame of these values.
