@@ -303,7 +303,9 @@ class PtyLink final : public Link {
     }
     const short events = poll.revents(slot_);
     if ((events & POLLIN) != 0) read_once(master_.get(), bytes);
-    if ((events & POLLHUP) != 0) {
+    // The hangup the wait saw may be over: the other side can have been opened again (and have
+    // written what was just read) since. Only a hangup still there is one.
+    if ((events & POLLHUP) != 0 && other_side_closed()) {
       hang_up();
     } else if ((events & POLLOUT) != 0) {
       flush();
