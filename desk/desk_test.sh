@@ -75,6 +75,10 @@ quit
 EOF
 
 start=$(date +%s)
+# Leak checking stays off for the panel alone: the display's GL driver, loaded and unloaded by
+# the window system, leaves a few allocations at exit in code that is not ours and that a
+# suppression cannot name (its module is gone). Memory errors are still checked.
+ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0" \
 HMC_SIM_STATE="$work/state" DISPLAY="$display" timeout 60 "$desk" \
   --port "sim://desktest?fresh&trace=$trace" --script "$work/script.txt" --screenshot-dir "$work/shots" \
   >"$work/desk.log" 2>&1 || fail "hmc-desk failed: $(cat "$work/desk.log")"
