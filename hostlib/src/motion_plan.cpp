@@ -335,8 +335,11 @@ std::optional<FirmwareRamp> fit_ramp(uint64_t steps, double v, double a, double 
       best_err = err;
     }
   };
+  // Delays above kMaxDelayUs are never considered: stop there, or a very slow v (a huge d0,
+  // where ++d may not even change d) keeps this loop going for ever.
   const double window = std::max(3.0, std::floor(d0 / 50));
-  for (double d = d0; d <= d0 + window; ++d) {
+  const double d_last = std::min(d0 + window, double{kMaxDelayUs});
+  for (double d = d0; d <= d_last; ++d) {
     const double vv = 1e6 / d;
     const double guesses[2] = {4 * d_steps / (target_s * target_s),  // triangle
                                target_s > d_steps / vv ? vv / (target_s - d_steps / vv) : 0};

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "hmc/codec.h"
+#include "hmc/motion_file.h"
 
 namespace {
 
@@ -586,6 +587,20 @@ TEST_CASE("plots: an SVG panel per motor, CSV rows for every point") {
 
   const Plan empty = plan_ok(file({}, {}));
   CHECK(balanced(plot_svg(empty, "nothing")));
+}
+
+// Found by the motion_file fuzzer (its long run): a `together` step whose slowest move needs a
+// delay far beyond what the board can time made fit_ramp() count delays for ever.
+TEST_CASE("a coordinated move far slower than the board can time is planned at once") {
+  const std::string text = R"({"hmc_motion": 1, "name": "seed", "motors": {"pan": {"motor": 1, "limits": {"min": -100, "max": {"rev": 2}}}, "tilt": {"motor": 2, "microstep": 4, "gear_ratio": 2.5, "speed": {"rpm": 30}, "accel": 8000}, "spin": {"motor": 3, "steps_per_rev": 400, "microstep": 1}}, "steps": [
+{"home": ["pan", "tilt"]},
+{"together": [{"motor": "pan", "to": 400}, {"motor": "tilt", "by": -1, "speed": 1.5}, {"motor": "spin", "by": 186400000, "accel": 10, "profile": "s-curve"}]},
+{"stop": ["pan", "spin"]}
+]})";
+  const auto parsed = parse_motion_file(text, "slow.json");
+  REQUIRE(parsed.ok());
+  const auto plan = plan_motion(*parsed, {});  // returns (it used to loop for ever)
+  if (!plan.ok()) CHECK(!plan.error().empty());
 }
 
 }  // namespace
