@@ -355,19 +355,13 @@ SessionResult<Done> Session::wait(const std::function<bool()>& done, std::option
     if (done()) return Done{};
     if (interrupted()) return interrupted_error();
     if (limit && Clock::now() - start > *limit) {
-      SessionError e = make_error(SessionError::Kind::kNoReply,
-                                  "the motion did not end within " + std::to_string(limit->count()) + " ms");
-      (void)stop_all();
-      e.message += "; every motor was sent a stop";
-      return e;
+      return stopping(make_error(SessionError::Kind::kNoReply, "the motion did not end within " +
+                                                                   std::to_string(limit->count()) +
+                                                                   " ms; every motor was sent a stop"));
     }
     // Seed firmware: nothing will arrive, but reading notices a link that fails.
     SessionResult<std::vector<BoardFrame>> frames = pump(kSlice);
-    if (!frames) {
-      SessionError e = frames.error();
-      (void)stop_all();  // the link may be gone, but if it is not, nothing keeps moving
-      return e;
-    }
+    if (!frames) return stopping(frames.error());  // the link may be gone, but if it is not...
     if (rebooted_) {
       return make_error(SessionError::Kind::kLink,
                         "the board restarted during the motion (power or reset): its positions are lost");
@@ -377,11 +371,7 @@ SessionResult<Done> Session::wait(const std::function<bool()>& done, std::option
       // A lost event would leave a motor "moving" here for ever: ask the moving ones.
       for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
         if (model_.motor(m).state == MotorState::kIdle) continue;
-        if (SessionResult<BoardFrame> status = execute(StatusQuery{m}); !status) {
-          SessionError e = status.error();
-          (void)stop_all();
-          return e;
-        }
+        if (SessionResult<BoardFrame> status = execute(StatusQuery{m}); !status) return stopping(status.error());
       }
       last_heard = Clock::now();
     }
@@ -506,6 +496,11 @@ SessionError Session::interrupted_error() {
     e.message += "; every motor was sent a stop";
   }
   return e;
+}
+
+SessionError Session::stopping(SessionError error) {
+  (void)stop_all();  // best effort: the error being reported is the one that matters
+  return error;
 }
 
 SessionError Session::link_error(const std::string& message) {

@@ -104,7 +104,6 @@ class Session {
   // The board's VER answer (v2 only).
   const std::optional<Version>& version() const { return version_; }
   const BoardModel& model() const { return model_; }
-  Transport& transport() { return *transport_; }
   // "simulated board sim://default (real time), firmware 1.0.0, protocol 2" and the like.
   std::string description() const;
   // The rate budget of the board in steps/s (VER; the seed's figure is unknown, ours is used).
@@ -166,6 +165,8 @@ class Session {
   bool interrupted() const { return options_.interrupted && options_.interrupted(); }
   SessionError interrupted_error();
   SessionError link_error(const std::string& message);
+  // Sends a stop to every motor, then gives back `error`: a wait that fails leaves nothing moving.
+  SessionError stopping(SessionError error);
 
   // Seed firmware: the move each motor was last sent, timed from when it was sent.
   struct SeedMove {
