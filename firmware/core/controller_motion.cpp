@@ -132,6 +132,13 @@ void Controller::homing_step(uint8_t motor) {
       send_homing_ended(motor, true);
       return;
     }
+    // The pull-off moves toward the other end; a pressed switch there ends homing here, zeroed,
+    // rather than letting a step go toward it before the switch poll halts the motor.
+    const uint8_t other = end == 0 ? 1 : 0;
+    if (limits_[index(motor)][other] || board_.switches.limit_pressed(motor, other)) {
+      send_homing_ended(motor, true);
+      return;
+    }
     mo.home_phase = HomePhase::kPullOff;
     const MoveSpec back{end == 1, microstep, pull_off, interval_for(mo.home_delay_us), 0};
     if (start_move(motor, back, rate_for(mo.home_delay_us), MotorState::kHoming) != Reason::kOk) {

@@ -193,9 +193,6 @@ PlanStatus plan_move(const MoveSpec& spec, uint64_t m_entry, Profile& out) {
   const bool rising = m_entry <= m_v;
   uint32_t first = static_cast<uint32_t>((rising ? m_v - m_entry : m_entry - m_v) / k);
   const int64_t gap = rising ? tv - tu : tu - tv;  // |T_v − τ_u|, Q16
-  const int64_t shift_abs = static_cast<int64_t>(
-      mul_div(static_cast<uint64_t>(gap), static_cast<uint64_t>(gap), 2 * tv_q16));
-  const int64_t shift = rising ? shift_abs : -shift_abs;  // cruise: t_j = t₀ + j·I + shift
   uint8_t count = 0;
 
   if (n != 0 && rising && !reaches(n, k, 2 * m_v - m_entry)) {
@@ -218,7 +215,15 @@ PlanStatus plan_move(const MoveSpec& spec, uint64_t m_entry, Profile& out) {
       set_down(out.phases[count++], first, m_entry, k, tu, false);
     }
   }
-  const int64_t cruise_first = int64_t{first + 1} * interval + round_q16(shift);
+  // The cruise's first step, step first + 1: the speed change ends |T_v − τ_u| after the
+  // anchor at x_v = |M_v − M_u|/K, then the motor covers first + 1 − x_v steps at v. (The
+  // closed form (first + 1)·I ± (T_v − τ_u)²/(2T_v) cancels two terms of up to 10¹² ticks
+  // when slowing to a very slow rate; this one stays within a few I.)
+  const uint64_t m_first = rising ? m_entry + uint64_t{first} * k : m_entry - uint64_t{first} * k;
+  const uint64_t short_of_v = rising ? m_v - m_first : m_first - m_v;  // < K
+  const int64_t cruise_q16 =
+      gap + q16(interval) - static_cast<int64_t>(mul_div(short_of_v, uint64_t{interval} << 16, k));
+  const int64_t cruise_first = round_q16(cruise_q16);
   if (n == 0) {
     set_cruise(out.phases[count++], kEndless, interval, cruise_first);
     out.phase_count = count;
@@ -230,11 +235,12 @@ PlanStatus plan_move(const MoveSpec& spec, uint64_t m_entry, Profile& out) {
   const uint32_t cruise = n - first - braking;
   if (cruise > 0) {
     set_cruise(out.phases[count++], cruise, interval, cruise_first);
-    // From the last cruise step (at j·I + round(shift)) to the end of braking.
-    const int64_t end = q16(uint64_t{braking} * interval) + tv / 2 + shift - round_q16(shift) * kOne;
+    // From the last cruise step (scheduled at its ideal time rounded) to the end of braking.
+    const int64_t end = q16(uint64_t{braking} * interval) + tv / 2 + cruise_q16 - cruise_first * kOne;
     set_down(out.phases[count++], braking, uint64_t{braking} * k, k, end, true);
   } else if (braking > 0) {
-    const int64_t end = q16(uint64_t{n} * interval) + tv / 2 + shift;
+    // Braking ends where the cruise's step n would have come, plus T_v/2.
+    const int64_t end = cruise_q16 + q16(uint64_t{braking - 1} * interval) + tv / 2;
     set_down(out.phases[count++], braking, uint64_t{braking} * k, k, end, false);
   }
   out.phase_count = count;

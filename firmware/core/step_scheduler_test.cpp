@@ -522,6 +522,10 @@ TEST_CASE("a new move in the same direction continues from the current speed") {
       {"too short to stop: brakes past the target", 20000, 2400, 96000000, 20000, 2400, 100, 1},
       {"triangle from speed", 20000, 4800, 96000000, 20000, 1200, 3000, 1},
       {"run until stopped again", 20000, 4800, 96000000, 20000, 3000, 0, 1},
+      // Down to the slowest rate a move may ask for (89 s a step): the cruise's first step
+      // must not be computed from a cancellation of two terms of 10^12 ticks.
+      {"slower, to 89 s a step", 20000, 2400, 96000000, 20000, 4272000000u, 10004, 1},
+      {"slower, to 89 s a step, run until stopped", 250, 12000, 480000000, 250, 4272000000u, 0, 1},
   };
   long double overall = 0;
   for (const Case& c : cases) {
@@ -532,7 +536,7 @@ TEST_CASE("a new move in the same direction continues from the current speed") {
     const uint32_t h = bench.handover_step(1);
     REQUIRE(bench.sched.start(1, move(false, c.n2, c.i2, c.a2, c.micro2)) == StepStatus::kOk);
     if (c.n2 == 0) {
-      bench.run_until(c.at + 480000000);
+      bench.run_until(c.at + 480000000 + 3 * Ticks{c.i2});  // a few cruise steps
       bench.sched.halt(1);
     }
     bench.run_out();
@@ -551,7 +555,7 @@ TEST_CASE("a new move in the same direction continues from the current speed") {
     overall = std::max(overall, worst);
     check_pulses(bench);
   }
-  report("replacements, same direction (8 cases)", overall);
+  report("replacements, same direction (10 cases)", overall);
 }
 
 TEST_CASE("a constant-rate move replaced keeps stepping from its last step") {
