@@ -24,19 +24,22 @@ double wire_ms(size_t bytes, double baud) { return static_cast<double>(bytes) * 
 int main(int argc, char** argv) {
   std::string port;
   int count = 1000;
+  bool paced = false;  // the board behind the port receives and sends at 115200 baud
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg == "--port" && i + 1 < argc) {
+    if (arg == "--paced") {
+      paced = true;
+    } else if (arg == "--port" && i + 1 < argc) {
       port = argv[++i];
     } else if (arg == "--count" && i + 1 < argc) {
       count = std::atoi(argv[++i]);
     } else {
-      std::fprintf(stderr, "usage: round_trip --port PORT [--count N]\n");
+      std::fprintf(stderr, "usage: round_trip --port PORT [--count N] [--paced]\n");
       return 2;
     }
   }
   if (port.empty() || count < 1) {
-    std::fprintf(stderr, "usage: round_trip --port PORT [--count N]\n");
+    std::fprintf(stderr, "usage: round_trip --port PORT [--count N] [--paced]\n");
     return 2;
   }
   auto transport = hmc::open_port(port);
@@ -74,5 +77,8 @@ int main(int argc, char** argv) {
   std::printf("at 115200 baud the line (%zu bytes) takes %.3f ms on the wire, with its reply (%zu bytes) %.3f ms; "
               "median / wire time of both = %.3f\n",
               line_bytes, line_wire, reply_bytes, wire, at(0.5) / wire);
+  std::printf("summary: | round trip of an acknowledged stop, %s | median %.3f ms | %.3f ms on the wire at 115200 | "
+              "%.3f | host + board cost small beside the wire |\n",
+              paced ? "board paced at 115200 baud" : "bytes delivered at once", at(0.5), wire, at(0.5) / wire);
   return 0;
 }

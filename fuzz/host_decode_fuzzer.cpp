@@ -7,12 +7,15 @@
 //     for line_too_long;
 //   - an accepted command round-trips: encode() succeeds, decode(encode(c)) == c and is
 //     canonical, encode() of that is the same frame, and a canonical input is that frame;
-//   - parse_input() accepts only commands that validate and encode, and explains refusals.
+//   - parse_input() accepts only commands that validate and encode, and explains refusals;
+//   - the one-pass reading of canonical frames accepts only what the step-by-step reading
+//     accepts as canonical, with the same command and values, in either checksum mode.
 #include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "frame_grammar.h"
 #include "fuzz_support.h"
 #include "hmc/line_splitter.h"
 
@@ -175,6 +178,18 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     while (splitter.next()) ++more;
     require(more == (ends_in_unfinished_line(input) ? 1u : 0u),
             [&] { return "finish() gave " + std::to_string(more) + " more lines"; }, input);
+  }
+
+  // The one-pass reading agrees with the step by step one wherever it accepts.
+  for (const proto::ChecksumMode mode : {proto::ChecksumMode::kSum, proto::ChecksumMode::kCrc16}) {
+    namespace g = hmc::grammar;
+    g::Frame fast;
+    if (!g::parse_canonical_frame(input, mode, g::command_shapes(), fast)) continue;
+    const auto slow = g::parse_frame(input, mode, g::command_shapes());
+    require(slow.ok(), [&] { return "one-pass reading accepts what parse_frame refuses: " + slow.error().message; },
+            input);
+    require(slow->shape == fast.shape && slow->canonical && slow->values == fast.values,
+            [&] { return std::string("one-pass reading differs from parse_frame"); }, input);
   }
 
   // The input as one line, and as what a person types.

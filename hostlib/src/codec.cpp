@@ -26,9 +26,68 @@ Command command_of(const g::Shape& shape, const uint32_t* values) {
 }
 
 std::string usage_of(const g::Shape& shape) {
-  std::string usage = shape.name;
+  std::string usage(shape.name);
   for (uint32_t i = 0; i < shape.value_count; ++i) usage += std::string(" <") + shape.fields[i].name + ">";
   return usage;
+}
+
+// The refusal of values find_fault() found wrong, explained at their canonical offsets.
+Diagnostic refusal_of(const g::Shape& shape, const uint32_t* values) {
+  const auto offsets = g::canonical_offsets(shape, values);
+  return std::move(*g::check_values(shape, values, offsets.data()));
+}
+
+// lint() of a command whose values are at hand.
+// Whether any field of the command has advice (STM's delay_us alone, today).
+constexpr bool has_advice(const proto::CommandSpec& spec) {
+  for (uint32_t i = 0; i < spec.value_count; ++i) {
+    if (spec.fields[i].advised_min != 0 || spec.fields[i].advised_max != 0) return true;
+  }
+  return false;
+}
+
+template <std::size_t... I>
+constexpr std::array<bool, sizeof...(I)> advice_table(std::index_sequence<I...>) {
+  return {has_advice(proto::kCommands[I])...};
+}
+constexpr auto kHasAdvice = advice_table(std::make_index_sequence<proto::kCommandCount>{});
+
+std::vector<Warning> lint_values(const proto::CommandSpec& spec, const uint32_t* values, const Command& command) {
+  std::vector<Warning> out;
+  if (!kHasAdvice[static_cast<std::size_t>(spec.id)] && !std::holds_alternative<SoftLimits>(command)) return out;
+  const bool has_action = spec.action_field >= 0;
+  const uint32_t action = has_action ? values[static_cast<std::size_t>(spec.action_field)] : 0;
+  for (uint32_t i = 0; i < spec.value_count; ++i) {
+    const proto::FieldSpec& f = spec.fields[i];
+    if (f.advised_min == 0 && f.advised_max == 0) continue;
+    if (values[i] >= f.advised_min && values[i] <= f.advised_max) continue;
+    if (has_action && action == proto::kActionStop && (f.flags & proto::kUncheckedOnStop)) continue;
+    if (values[i] == 0 && (f.flags & proto::kZeroAllowedOnHome) && has_action && action == proto::kActionHome) {
+      continue;
+    }
+    out.push_back({f.name, std::string(f.name) + " " + std::to_string(values[i]) + " is outside the spec's advised " +
+                               std::to_string(f.advised_min) + "-" + std::to_string(f.advised_max) +
+                               (values[i] < f.advised_min ? " (the motor may stall or skip steps)"
+                                                          : " (very slow)")});
+  }
+  // Limits that are not ordered switch soft limits off; only all zeros says so plainly.
+  if (const auto* l = std::get_if<SoftLimits>(&command)) {
+    const bool all_zero = l->low_sign == 0 && l->low == 0 && l->high_sign == 0 && l->high == 0;
+    if (!all_zero && l->low_position() >= l->high_position()) {
+      out.push_back({"high", "low " + position_text(l->low_position()) + " is not below high " +
+                                 position_text(l->high_position()) +
+                                 ": this switches the soft limits off (LIM m 0 0 0 0 says so plainly)"});
+    }
+  }
+  return out;
+}
+
+// The accepted command of a frame that passed every check.
+Decoded decoded_of(const g::Frame& frame) {
+  Decoded out{command_of(*frame.shape, frame.values.data()), frame.canonical, {}};
+  const auto id = static_cast<proto::CommandId>(g::command_shapes().index_of(*frame.shape));
+  out.warnings = lint_values(proto::command_spec(id), frame.values.data(), out.command);
+  return out;
 }
 
 }  // namespace
@@ -43,69 +102,46 @@ uint32_t checksum(const Command& command, proto::ChecksumMode mode) {
 }
 
 Result<Decoded, Diagnostic> decode(std::string_view line, proto::ChecksumMode mode) {
+  // The common case in one pass; anything else (a refusal, blanks, leading zeros) is judged
+  // and explained step by step below.
+  g::Frame fast;
+  if (g::parse_canonical_frame(line, mode, g::command_shapes(), fast) &&
+      g::values_valid(*fast.shape, fast.values.data())) {
+    return decoded_of(fast);
+  }
   auto frame = g::parse_frame(line, mode, g::command_shapes());
   if (!frame) return frame.error();
   // 15-16. Ranges and rules.
   if (auto refusal = g::check_values(*frame->shape, frame->values.data(), frame->offsets.data())) {
     return std::move(*refusal);
   }
-  Decoded out{command_of(*frame->shape, frame->values.data()), frame->canonical, {}};
-  out.warnings = lint(out.command);
-  return out;
+  return decoded_of(*frame);
 }
 
 Result<Command, Diagnostic> validate(const Command& command) {
   const g::Shape& shape = shape_of(command);
   const CommandValues v = command_values(command);
-  if (!g::check_values(shape, v.values.data(), nullptr)) return command;
-  const auto offsets = g::canonical_offsets(shape, v.values.data());
-  return std::move(*g::check_values(shape, v.values.data(), offsets.data()));
+  if (g::values_valid(shape, v.values.data())) return command;
+  return refusal_of(shape, v.values.data());
 }
 
 std::vector<Warning> lint(const Command& command) {
-  std::vector<Warning> out;
-  const proto::CommandSpec& spec = command_spec(command);
-  const CommandValues v = command_values(command);
-  const bool has_action = spec.action_field >= 0;
-  const uint32_t action = has_action ? v.values[static_cast<std::size_t>(spec.action_field)] : 0;
-  for (uint32_t i = 0; i < spec.value_count; ++i) {
-    const proto::FieldSpec& f = spec.fields[i];
-    if (f.advised_min == 0 && f.advised_max == 0) continue;
-    if (has_action && action == proto::kActionStop && (f.flags & proto::kUncheckedOnStop)) continue;
-    if (v.values[i] == 0 && (f.flags & proto::kZeroAllowedOnHome) && has_action && action == proto::kActionHome) {
-      continue;
-    }
-    if (v.values[i] >= f.advised_min && v.values[i] <= f.advised_max) continue;
-    out.push_back({f.name, std::string(f.name) + " " + std::to_string(v.values[i]) + " is outside the spec's advised " +
-                               std::to_string(f.advised_min) + "-" + std::to_string(f.advised_max) +
-                               (v.values[i] < f.advised_min ? " (the motor may stall or skip steps)"
-                                                            : " (very slow)")});
-  }
-  // Limits that are not ordered switch soft limits off; only all zeros says so plainly.
-  if (const auto* l = std::get_if<SoftLimits>(&command)) {
-    const bool all_zero = l->low_sign == 0 && l->low == 0 && l->high_sign == 0 && l->high == 0;
-    if (!all_zero && l->low_position() >= l->high_position()) {
-      out.push_back({"high", "low " + position_text(l->low_position()) + " is not below high " +
-                                 position_text(l->high_position()) +
-                                 ": this switches the soft limits off (LIM m 0 0 0 0 says so plainly)"});
-    }
-  }
-  return out;
+  return lint_values(command_spec(command), command_values(command).values.data(), command);
 }
 
 Result<std::string, Diagnostic> encode(const Command& command, proto::ChecksumMode mode) {
-  auto valid = validate(command);
-  if (!valid) return valid.error();
-  const CommandValues v = command_values(command);
-  return g::write_frame(shape_of(command), v.values.data(), mode);
+  std::string out;
+  auto written = encode_into(command, out, mode);
+  if (!written) return written.error();
+  return out;
 }
 
 Result<std::size_t, Diagnostic> encode_into(const Command& command, std::string& out, proto::ChecksumMode mode) {
-  auto valid = validate(command);
-  if (!valid) return valid.error();
+  const g::Shape& shape = shape_of(command);
   const CommandValues v = command_values(command);
+  if (!g::values_valid(shape, v.values.data())) return refusal_of(shape, v.values.data());
   out.clear();
-  g::append_frame(out, shape_of(command), v.values.data(), mode);
+  g::append_frame(out, shape, v.values.data(), mode);
   return out.size();
 }
 

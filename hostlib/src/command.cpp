@@ -72,12 +72,17 @@ T from_values(const uint32_t* values) {
   return out;
 }
 
-template <std::size_t... I>
-Command make_alternative(std::size_t index, const uint32_t* values, std::index_sequence<I...>) {
-  Command out;
-  ((index == I ? (void)(out = from_values<std::variant_alternative_t<I, Command>>(values)) : void()), ...);
-  return out;
+template <std::size_t I>
+Command make_one(const uint32_t* values) {
+  return Command(std::in_place_index<I>, from_values<std::variant_alternative_t<I, Command>>(values));
 }
+
+// One maker per alternative, indexed by CommandId: a single indirect call builds the command.
+template <std::size_t... I>
+constexpr std::array<Command (*)(const uint32_t*), sizeof...(I)> makers(std::index_sequence<I...>) {
+  return {&make_one<I>...};
+}
+constexpr auto kMakers = makers(std::make_index_sequence<std::variant_size_v<Command>>{});
 
 }  // namespace
 
@@ -100,8 +105,7 @@ CommandValues command_values(const Command& command) {
 }
 
 Command make_command(proto::CommandId id, const uint32_t* values) {
-  return make_alternative(static_cast<std::size_t>(id), values,
-                          std::make_index_sequence<std::variant_size_v<Command>>{});
+  return kMakers[static_cast<std::size_t>(id)](values);
 }
 
 const proto::CommandSpec* find_command(std::string_view name) {

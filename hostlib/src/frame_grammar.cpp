@@ -17,11 +17,19 @@ constexpr std::string_view kEnd = "ETX";
 // Enough tokens for a line of kLineMax '#' bytes.
 constexpr std::size_t kMaxTokens = proto::kLineMax + 1;
 
+// A three-letter name as one number (find() compares these); 0 for names of another length.
+constexpr uint32_t packed_name(std::string_view name) {
+  if (name.size() != 3) return 0;
+  return static_cast<uint32_t>(static_cast<unsigned char>(name[0])) |
+         static_cast<uint32_t>(static_cast<unsigned char>(name[1])) << 8 |
+         static_cast<uint32_t>(static_cast<unsigned char>(name[2])) << 16;
+}
+
 template <std::size_t N>
 constexpr std::array<Shape, N> shapes_of(const proto::CommandSpec (&specs)[N]) {
   std::array<Shape, N> out{};
   for (std::size_t i = 0; i < N; ++i) {
-    out[i] = {specs[i].name, specs[i].value_count, specs[i].fields, specs[i].action_field};
+    out[i] = {specs[i].name, specs[i].value_count, specs[i].fields, specs[i].action_field, packed_name(specs[i].name)};
   }
   return out;
 }
@@ -29,7 +37,9 @@ constexpr std::array<Shape, N> shapes_of(const proto::CommandSpec (&specs)[N]) {
 template <std::size_t N>
 constexpr std::array<Shape, N> shapes_of(const proto::BoardFrameSpec (&specs)[N]) {
   std::array<Shape, N> out{};
-  for (std::size_t i = 0; i < N; ++i) out[i] = {specs[i].name, specs[i].value_count, specs[i].fields, -1};
+  for (std::size_t i = 0; i < N; ++i) {
+    out[i] = {specs[i].name, specs[i].value_count, specs[i].fields, -1, packed_name(specs[i].name)};
+  }
   return out;
 }
 
@@ -127,8 +137,16 @@ std::string quote(std::string_view s) {
 }
 
 const Shape* ShapeTable::find(std::string_view name) const {
+  // Names are three letters: compared as one number, without a call per name.
+  if (name.size() == 3) {
+    const uint32_t key = packed_name(name);
+    for (std::size_t i = 0; i < count; ++i) {
+      if (shapes[i].key == key) return &shapes[i];
+    }
+    return nullptr;
+  }
   for (std::size_t i = 0; i < count; ++i) {
-    if (name == shapes[i].name) return &shapes[i];
+    if (shapes[i].name == name) return &shapes[i];
   }
   return nullptr;
 }
@@ -338,7 +356,87 @@ Result<Frame, Diagnostic> parse_frame(std::string_view line, proto::ChecksumMode
   return out;
 }
 
-std::optional<Diagnostic> check_values(const Shape& shape, const uint32_t* values, const std::size_t* offsets) {
+namespace {
+
+// Reads the run of digits at `p` into `value` and returns where it stops. The line's "#ETX"
+// stops every run before the line ends, so the loop needs no bound of its own; a run longer
+// than 10 digits wraps `value`, and the caller refuses it for its length.
+inline const char* read_digits(const char* p, uint64_t& value) {
+  value = 0;
+  for (unsigned digit = static_cast<unsigned char>(*p) - '0'; digit <= 9;
+       digit = static_cast<unsigned char>(*++p) - '0') {
+    value = value * 10 + digit;
+  }
+  return p;
+}
+
+// A canonical number: 1 to `max_digits` digits, no leading zero.
+inline bool canonical_digits(const char* first, const char* stop, std::ptrdiff_t max_digits) {
+  const std::ptrdiff_t digits = stop - first;
+  return digits >= 1 && digits <= max_digits && (digits == 1 || *first != '0');
+}
+
+}  // namespace
+
+bool parse_canonical_frame(std::string_view line, proto::ChecksumMode mode, const ShapeTable& table, Frame& out) {
+  if (!line.empty() && line.back() == '\n') line.remove_suffix(1);
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  if (line.size() > proto::kLineMax || line.size() < 12 || line.compare(0, 4, "STX#") != 0 ||
+      line.compare(line.size() - 4, 4, "#ETX") != 0) {
+    return false;
+  }
+  const char* const end = line.data() + line.size() - 4;  // the '#' before ETX
+  // Length: one digit (a frame has at most kMaxValues + 1 = 9 fields), then the name.
+  const char* p = line.data() + 4;
+  if (p[0] < '1' || p[0] > '9' || p[1] != '#') return false;
+  const auto length = static_cast<uint32_t>(p[0] - '0');
+  const char* const name = p + 2;
+  for (p = name; *p != '#';) ++p;  // the '#' before ETX stops it
+  if (p >= end) return false;
+  const Shape* shape = table.find(std::string_view(name, static_cast<std::size_t>(p - name)));
+  if (shape == nullptr || length != shape->value_count + 1u) return false;
+  ++p;
+  uint32_t sum = 0;
+  for (uint32_t i = 0; i < shape->value_count; ++i) {
+    uint64_t value = 0;
+    const char* const first = p;
+    p = read_digits(p, value);
+    if (p >= end || *p != '#' || !canonical_digits(first, p, proto::kMaxDigits) || value > proto::kIntMax) {
+      return false;
+    }
+    out.values[i] = static_cast<uint32_t>(value);
+    sum += static_cast<uint32_t>(value);
+    ++p;
+  }
+  uint64_t given = 0;
+  const char* const checksum_at = p;
+  p = read_digits(p, given);
+  if (p != end) return false;
+  if (mode == proto::ChecksumMode::kCrc16) {
+    // Exactly kCrcDigits digits, zero-padded.
+    const std::string_view covered(line.data(), static_cast<std::size_t>(checksum_at - line.data()));
+    if (p - checksum_at != proto::kCrcDigits || given != crc_of(covered)) return false;
+  } else if (!canonical_digits(checksum_at, p, 3) || given != (sum & 0xFFu)) {
+    return false;
+  }
+  out.shape = shape;
+  out.canonical = true;
+  return true;
+}
+
+namespace {
+
+// The setting whose range a setting value (kSettingValue, after a setting id) must lie in.
+const proto::SettingSpec* setting_of(const proto::FieldSpec& f, const uint32_t* values, uint32_t i) {
+  if (!(f.flags & proto::kSettingValue) || i == 0 || values[i - 1] < 1 || values[i - 1] > proto::kSettingCount) {
+    return nullptr;
+  }
+  return &proto::kSettings[values[i - 1] - 1];
+}
+
+}  // namespace
+
+ValueFault find_fault(const Shape& shape, const uint32_t* values) {
   // The action field precedes every field whose check depends on it, and a setting's id the
   // value it ranges, so checking left to right has vouched for them when they are needed.
   const bool has_action = shape.action_field >= 0;
@@ -348,38 +446,40 @@ std::optional<Diagnostic> check_values(const Shape& shape, const uint32_t* value
   for (uint32_t i = 0; i < shape.value_count; ++i) {
     const proto::FieldSpec& f = shape.fields[i];
     const uint32_t v = values[i];
+    // Most fields: within their own range, whatever the exemptions below.
+    if ((f.flags & (proto::kSettingValue | proto::kPowerOfTwo)) == 0 && v >= f.min && v <= f.max) continue;
     if ((f.flags & proto::kUncheckedOnStop) && stopping) continue;
     if (v == 0 && (f.flags & proto::kZeroAllowedOnHome) && homing) continue;
-    uint32_t min = f.min;
-    uint32_t max = f.max;
-    const char* setting_name = nullptr;
-    if ((f.flags & proto::kSettingValue) && i > 0 && values[i - 1] >= 1 && values[i - 1] <= proto::kSettingCount) {
-      const proto::SettingSpec& s = proto::kSettings[values[i - 1] - 1];
-      min = s.min;
-      max = s.max;
-      setting_name = s.name;
-    }
-    const bool in_range = v >= min && v <= max && (!(f.flags & proto::kPowerOfTwo) || proto::is_power_of_two(v));
-    if (in_range) continue;
-    if (offsets == nullptr) return refuse(proto::Reason::kOutOfRange, 0, 0, "", "");  // the caller asks again
-    std::string message = std::string(f.name) + " is " + std::to_string(v) + ": expected ";
-    if (setting_name != nullptr) {
-      message += std::to_string(min) + "-" + std::to_string(max) + " for setting " + std::to_string(values[i - 1]) +
-                 " (" + setting_name + ")";
-    } else {
-      message += range_text(f);
-    }
-    if (f.flags & proto::kZeroAllowedOnHome) message += " (0 only when homing)";
-    return refuse(proto::Reason::kOutOfRange, static_cast<int>(proto::kTokenFirstValue + i), offsets[i], f.name,
-                  std::move(message), 0, v);
+    const proto::SettingSpec* setting = setting_of(f, values, i);
+    const uint32_t min = setting != nullptr ? setting->min : f.min;
+    const uint32_t max = setting != nullptr ? setting->max : f.max;
+    if (v >= min && v <= max && (!(f.flags & proto::kPowerOfTwo) || proto::is_power_of_two(v))) continue;
+    return {proto::Reason::kOutOfRange, i};
   }
-  if (homing && !proto::motor_has_switches(values[0])) {
-    if (offsets == nullptr) return refuse(proto::Reason::kNoSwitch, 0, 0, "", "");
+  if (homing && !proto::motor_has_switches(values[0])) return {proto::Reason::kNoSwitch, 0};
+  return {proto::Reason::kOk, 0};
+}
+
+std::optional<Diagnostic> check_values(const Shape& shape, const uint32_t* values, const std::size_t* offsets) {
+  const ValueFault fault = find_fault(shape, values);
+  const uint32_t i = fault.index;
+  if (fault.reason == proto::Reason::kNoSwitch) {
     return refuse(proto::Reason::kNoSwitch, proto::kTokenFirstValue, offsets[0], shape.fields[0].name,
                   "motor " + std::to_string(values[0]) +
                       " has no limit switch to home against; only motors with switches (1 and 2) can home");
   }
-  return std::nullopt;
+  if (fault.reason != proto::Reason::kOutOfRange) return std::nullopt;
+  const proto::FieldSpec& f = shape.fields[i];
+  std::string message = std::string(f.name) + " is " + std::to_string(values[i]) + ": expected ";
+  if (const proto::SettingSpec* setting = setting_of(f, values, i)) {
+    message += std::to_string(setting->min) + "-" + std::to_string(setting->max) + " for setting " +
+               std::to_string(values[i - 1]) + " (" + setting->name + ")";
+  } else {
+    message += range_text(f);
+  }
+  if (f.flags & proto::kZeroAllowedOnHome) message += " (0 only when homing)";
+  return refuse(proto::Reason::kOutOfRange, static_cast<int>(proto::kTokenFirstValue + i), offsets[i], f.name,
+                std::move(message), 0, values[i]);
 }
 
 std::array<std::size_t, proto::kMaxValues> canonical_offsets(const Shape& shape, const uint32_t* values) {
@@ -393,7 +493,7 @@ std::array<std::size_t, proto::kMaxValues> canonical_offsets(const Shape& shape,
     }
     return count;
   };
-  std::size_t at = kStart.size() + 1 + digits(shape.value_count + 1) + 1 + std::string_view(shape.name).size() + 1;
+  std::size_t at = kStart.size() + 1 + digits(shape.value_count + 1) + 1 + shape.name.size() + 1;
   for (uint32_t i = 0; i < shape.value_count; ++i) {
     offsets[i] = at;
     at += digits(values[i]) + 1;
@@ -403,31 +503,74 @@ std::array<std::size_t, proto::kMaxValues> canonical_offsets(const Shape& shape,
 
 namespace {
 
-// Decimal digits of `n` appended without a temporary string.
-void append_number(std::string& out, uint32_t n, std::size_t min_digits = 1) {
-  char digits[10];
-  std::size_t count = 0;
-  do {
-    digits[count++] = static_cast<char>('0' + n % 10);
-    n /= 10;
-  } while (n != 0);
-  for (std::size_t i = count; i < min_digits; ++i) out += '0';
-  while (count > 0) out += digits[--count];
+constexpr char kDigitPairs[] =
+    "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
+    "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
+    "8081828384858687888990919293949596979899";
+
+// Frames are written into a buffer on the stack, then appended to a string in one go. A
+// frame is at most 121 bytes (protocol_facts.h, kLineMax); kFrameBuffer also holds a name of
+// up to kLineMax bytes. The writers take and return the write position (a local pointer, so
+// the compiler need not fear that the bytes written alias it).
+constexpr std::size_t kFrameBuffer = 2 * proto::kLineMax + proto::kMaxValues * (proto::kMaxDigits + 1) + 32;
+
+char* write_text(char* w, std::string_view s) {
+  for (const char c : s) *w++ = c;  // a few bytes: a loop beats a call to memcpy
+  return w;
+}
+
+// Decimal digits of `n`, zero-padded to `min_digits` (at most 10), from the last digit back,
+// two at a time.
+inline char* write_number(char* w, uint32_t n, uint32_t min_digits = 1) {
+  if (n < 10 && min_digits <= 1) {  // motors, directions, lengths: most fields are one digit
+    *w = static_cast<char>('0' + n);
+    return w + 1;
+  }
+  uint32_t count = n < 100 ? 2 : n < 1000 ? 3 : n < 10000 ? 4 : n < 100000 ? 5 : n < 1000000 ? 6 : 7;
+  if (n >= 10000000) count = n < 100000000 ? 8 : n < 1000000000 ? 9 : 10;
+  if (n < 10) count = 1;
+  if (count < min_digits) count = min_digits;
+  char* const end = w + count;
+  char* p = end;
+  while (n >= 100) {
+    const uint32_t pair = (n % 100) * 2;
+    n /= 100;
+    *--p = kDigitPairs[pair + 1];
+    *--p = kDigitPairs[pair];
+  }
+  if (n >= 10) {
+    *--p = kDigitPairs[n * 2 + 1];
+    *--p = kDigitPairs[n * 2];
+  } else {
+    *--p = static_cast<char>('0' + n);
+  }
+  while (p != w) *--p = '0';
+  return end;
+}
+
+// The head of the frame, up to its checksum field; `sum` gets the seed's checksum on the way.
+char* write_head(char* w, const Shape& shape, const uint32_t* values, uint32_t& sum) {
+  w = write_text(w, "STX#");
+  w = write_number(w, shape.value_count + 1);
+  *w++ = '#';
+  w = write_text(w, shape.name);
+  sum = 0;
+  for (uint32_t i = 0; i < shape.value_count; ++i) {
+    *w++ = '#';
+    w = write_number(w, values[i]);
+    sum += values[i];
+  }
+  *w++ = '#';
+  sum &= 0xFFu;
+  return w;
 }
 
 }  // namespace
 
 void append_frame_head(std::string& out, const Shape& shape, const uint32_t* values) {
-  out += kStart;
-  out += '#';
-  append_number(out, shape.value_count + 1);
-  out += '#';
-  out += shape.name;
-  for (uint32_t i = 0; i < shape.value_count; ++i) {
-    out += '#';
-    append_number(out, values[i]);
-  }
-  out += '#';
+  char bytes[kFrameBuffer];
+  uint32_t sum = 0;
+  out.append(bytes, static_cast<std::size_t>(write_head(bytes, shape, values, sum) - bytes));
 }
 
 std::string frame_head(const Shape& shape, const uint32_t* values) {
@@ -441,21 +584,21 @@ uint32_t checksum_of(const Shape& shape, const uint32_t* values, proto::Checksum
 }
 
 std::string crc_text(uint32_t crc) {
-  std::string digits;
-  append_number(digits, crc, proto::kCrcDigits);
-  return digits;
+  char digits[proto::kMaxDigits];
+  return std::string(digits, static_cast<std::size_t>(write_number(digits, crc, proto::kCrcDigits) - digits));
 }
 
 void append_frame(std::string& out, const Shape& shape, const uint32_t* values, proto::ChecksumMode mode) {
-  const std::size_t start = out.size();
-  append_frame_head(out, shape, values);
+  char bytes[kFrameBuffer];
+  uint32_t sum = 0;
+  char* w = write_head(bytes, shape, values, sum);
   if (mode == proto::ChecksumMode::kCrc16) {
-    append_number(out, crc_of(std::string_view(out).substr(start)), proto::kCrcDigits);
+    w = write_number(w, crc_of(std::string_view(bytes, static_cast<std::size_t>(w - bytes))), proto::kCrcDigits);
   } else {
-    append_number(out, sum_of(values, shape.value_count));
+    w = write_number(w, sum);
   }
-  out += '#';
-  out += kEnd;
+  w = write_text(w, "#ETX");
+  out.append(bytes, static_cast<std::size_t>(w - bytes));
 }
 
 std::string write_frame(const Shape& shape, const uint32_t* values, proto::ChecksumMode mode) {

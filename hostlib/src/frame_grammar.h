@@ -19,10 +19,11 @@ namespace hmc::grammar {
 
 // What the grammar needs of one kind of frame: a CommandSpec or a BoardFrameSpec.
 struct Shape {
-  const char* name;
+  std::string_view name;
   uint32_t value_count;
   const proto::FieldSpec* fields;
   int action_field;  // -1: none
+  uint32_t key;      // a three-letter name packed into a number (0: another length)
 };
 
 // The frames one side may send, and how messages call them.
@@ -64,11 +65,24 @@ Diagnostic unknown_name(const ShapeTable& table, std::string_view name, std::siz
 // end in one LF, CRLF or CR, which is removed. A blank line is refused as bad_start.
 Result<Frame, Diagnostic> parse_frame(std::string_view line, proto::ChecksumMode mode, const ShapeTable& table);
 
+// Steps 1-14 in one pass for the common case: a canonical frame (nothing around it, no leading
+// zeros) whose every step passes. Fills shape and values and returns true; returns false for
+// anything else, which parse_frame() then judges and explains. It never accepts a line that
+// parse_frame() refuses or reads differently (the host_decode fuzzer checks this).
+bool parse_canonical_frame(std::string_view line, proto::ChecksumMode mode, const ShapeTable& table, Frame& out);
+
 // Steps 15-16: ranges left to right under the action's exemptions and the setting's range, then
-// the switch rule. `offsets[i]` is where value i starts in the text the diagnostic refers to.
-// Steps 15-16 of the order of checks. `offsets` (of each value in the line) name where a refusal
-// is; null asks only whether there is one (no message is built): the fast path of a frame
-// that is valid, whose caller asks again with offsets when it is not.
+// the switch rule. The first value that fails, and why (kOutOfRange or kNoSwitch; kOk: none).
+struct ValueFault {
+  proto::Reason reason;
+  uint32_t index;  // of the value
+};
+ValueFault find_fault(const Shape& shape, const uint32_t* values);
+inline bool values_valid(const Shape& shape, const uint32_t* values) {
+  return find_fault(shape, values).reason == proto::Reason::kOk;
+}
+// find_fault() explained: `offsets[i]` is where value i starts in the text the diagnostic
+// refers to. Nothing when the values pass.
 std::optional<Diagnostic> check_values(const Shape& shape, const uint32_t* values, const std::size_t* offsets);
 
 // Where each value starts in the canonical frame of these values.
