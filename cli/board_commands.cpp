@@ -98,9 +98,8 @@ void add_send(CLI::App& app, const GlobalOptions& g, int& exit_code) {
       } else {
         std::vector<std::string> words{o->first};
         words.insert(words.end(), o->values.begin(), o->values.end());
-        Result<Command, Diagnostic> command = o->values.empty() && o->first.find('#') != std::string::npos
-                                                  ? parse_input(o->first)
-                                                  : command_from_words(words);
+        Result<Command, Diagnostic> command =
+            o->values.empty() ? command_from_text(o->first) : command_from_words(words);
         if (!command) {
           if (g.json) {
             report_error(g, SessionError{SessionError::Kind::kInvalid, command.error().message, command.error().reason});
@@ -155,12 +154,7 @@ void add_stream(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     for (size_t number = 1; std::getline(in, text); ++number) {
       if (!text.empty() && text.back() == '\r') text.pop_back();
       if (is_blank(text)) continue;
-      Result<Command, Diagnostic> command = text.find('#') != std::string::npos ? parse_input(text) : [&] {
-        std::istringstream words_in(text);
-        std::vector<std::string> words;
-        for (std::string w; words_in >> w;) words.push_back(w);
-        return command_from_words(words);
-      }();
+      Result<Command, Diagnostic> command = command_from_text(text);
       if (!command) {
         std::cerr << o->path << ":" << number << ": ";
         print_refusal(std::cerr, text, command.error());

@@ -39,9 +39,9 @@ std::string command_names() {
   return out;
 }
 
-// A lone argument holding '#' is a frame or notation; otherwise NAME v1 ... vn.
+// A lone argument is a frame, notation or a quoted `NAME v1 ... vn`; otherwise the words.
 Result<Command, Diagnostic> command_from_arguments(const FrameOptions& o) {
-  if (o.values.empty() && o.first.find('#') != std::string::npos) return parse_input(o.first, o.mode());
+  if (o.values.empty()) return command_from_text(o.first, o.mode());
   std::vector<std::string> words{o.first};
   words.insert(words.end(), o.values.begin(), o.values.end());
   return command_from_words(words);

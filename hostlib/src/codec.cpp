@@ -234,4 +234,20 @@ Result<Command, Diagnostic> command_from_words(const std::vector<std::string>& w
   return validate(command_of(*shape, values.data()));
 }
 
+Result<Command, Diagnostic> command_from_text(std::string_view text, proto::ChecksumMode mode) {
+  if (text.find('#') != std::string_view::npos) return parse_input(text, mode);
+  std::vector<std::string> words;
+  for (std::size_t at = 0; at < text.size();) {
+    if (g::is_blank_byte(text[at])) {
+      ++at;
+      continue;
+    }
+    std::size_t end = at;
+    while (end < text.size() && !g::is_blank_byte(text[end])) ++end;
+    words.emplace_back(text.substr(at, end - at));
+    at = end;
+  }
+  return command_from_words(words);
+}
+
 }  // namespace hmc

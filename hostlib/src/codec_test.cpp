@@ -158,6 +158,14 @@ TEST_CASE("command_from_words builds and checks a command") {
   CHECK(hmc::command_from_words({"LED", "1", "2", "3", "4", "x"}).error().field == "w");
 }
 
+TEST_CASE("command_from_text takes a frame, notation or words on one line") {
+  CHECK(*hmc::encode(*hmc::command_from_text("  SET 1\t7 16 ")) == "STX#4#SET#1#7#16#24#ETX");
+  CHECK(*hmc::encode(*hmc::command_from_text("[#SVM#1#135]")) == "STX#3#SVM#1#135#136#ETX");
+  CHECK(*hmc::encode(*hmc::command_from_text("STX#3#SVM#1#135#136#ETX")) == "STX#3#SVM#1#135#136#ETX");
+  CHECK(hmc::command_from_text("SVM 1").error().reason == hmc::proto::Reason::kBadLength);
+  CHECK(hmc::command_from_text("   ").error().reason == hmc::proto::Reason::kUnknownCommand);
+}
+
 TEST_CASE("protocol v2 commands encode, decode and describe") {
   CHECK(*hmc::encode(hmc::VersionQuery{}) == "STX#1#VER#0#ETX");
   auto ver = decode("STX#1#VER#0#ETX");

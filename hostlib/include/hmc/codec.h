@@ -76,6 +76,10 @@ Result<Command, Diagnostic> parse_input(std::string_view text, proto::ChecksumMo
 // A command from a name and its values as separate words (`STM 1 1 128 1000 500`, `VER`).
 Result<Command, Diagnostic> command_from_words(const std::vector<std::string>& words);
 
+// A command as one line of text in any of the forms above: a frame or command-set notation
+// (the text holds a '#'), else words separated by blanks.
+Result<Command, Diagnostic> command_from_text(std::string_view text, proto::ChecksumMode mode = proto::ChecksumMode::kSum);
+
 // The checksum field of the command's canonical frame: the sum of its values mod 256, or the
 // CRC-16 of the frame's bytes before the checksum field.
 uint32_t checksum(const Command& command, proto::ChecksumMode mode = proto::ChecksumMode::kSum);
