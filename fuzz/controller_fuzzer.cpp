@@ -476,7 +476,8 @@ class Harness {
 
   // Matches the lines the board judged in this step to the lines sent, in order.
   void judge_lines(const Snapshot& before, const Snapshot& after) {
-    const std::string output = board_.take_output();
+    // What the firmware wrote in this step, whether or not it has crossed the line yet.
+    const std::string output = board_.take_written();
     const uint32_t judged = after.judged - before.judged;
     require(judged <= pending_.size(),
             [&] {

@@ -17,7 +17,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <deque>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -35,11 +34,8 @@ using sim::Ticks;
 using Clock = std::chrono::steady_clock;
 
 constexpr int kJournalVersion = 1;
-constexpr Ticks kMillisecond = hal::kTicksPerSecond / 1000u;
-// Fast: virtual time run between looks for output, so a read returns within this much virtual
-// time of the board sending.
 // Fast: virtual time runs in steps of the board's main-loop period, which is when it writes,
-// so what it sends reaches the host at the time it would on the wire.
+// so a read returns soon after a byte is through the board's transmit wire.
 constexpr Ticks kFastSlice = sim::kPollTicks;
 // Real time: how long a read sleeps between catching the board up with the wall clock.
 constexpr auto kRealTimeSleep = std::chrono::milliseconds(1);
@@ -190,11 +186,10 @@ Result<std::string> read_all(int fd) {
 
 class SimTransport final : public Transport {
  public:
-  SimTransport(SimPortOptions options, std::unique_ptr<sim::SimBoard> board, uint32_t baud, int journal_fd,
-               std::string journal_path, std::string note)
+  SimTransport(SimPortOptions options, std::unique_ptr<sim::SimBoard> board, int journal_fd, std::string journal_path,
+               std::string note)
       : options_(std::move(options)),
         board_(std::move(board)),
-        byte_ticks_(baud == 0 ? 0 : 10 * hal::kTicksPerSecond / baud),
         journal_fd_(journal_fd),
         journal_path_(std::move(journal_path)),
         note_(std::move(note)),
@@ -241,28 +236,23 @@ class SimTransport final : public Transport {
   }
 
   Result<std::string> read(std::chrono::milliseconds timeout) override {
-    collect_output();
-    std::string out = deliver_output();
+    std::string out = board_->take_output();
     if (options_.fast) {
       const Ticks end = board_->now() + duration_ticks(timeout);
       while (out.empty() && board_->now() < end) {
         board_->run_until(std::min(board_->now() + kFastSlice, end));
-        collect_output();
-        out = deliver_output();
+        out = board_->take_output();
       }
       // A host reads a line once it is whole: wait for the rest of the one begun.
-      const auto line_end = std::find_if(outbound_.begin(), outbound_.end(), [](const auto& b) { return b.second == '\n'; });
-      if (!out.empty() && out.back() != '\n' && line_end != outbound_.end()) {
-        board_->run_until(line_end->first);
-        collect_output();
-        out += deliver_output();
+      while (!out.empty() && out.back() != '\n' && board_->transmitting()) {
+        board_->run_until(board_->next_output());
+        out += board_->take_output();
       }
     } else {
       const Clock::time_point deadline = Clock::now() + timeout;
       while (true) {
         board_->run_until(wall_ticks());
-        collect_output();
-        out += deliver_output();
+        out += board_->take_output();
         if (!out.empty()) break;
         const Clock::time_point now = Clock::now();
         if (now >= deadline) break;
@@ -295,29 +285,8 @@ class SimTransport final : public Transport {
     return base_ + duration_ticks(std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - origin_));
   }
 
-  // What the board wrote goes out on its transmit line one byte per 10 bit times, as on the
-  // real link: each byte reaches the host when its stop bit has.
-  void collect_output() {
-    const std::string bytes = board_->take_output();
-    for (const char c : bytes) {
-      tx_free_at_ = std::max(tx_free_at_, board_->now()) + byte_ticks_;
-      outbound_.push_back({tx_free_at_, c});
-    }
-  }
-  std::string deliver_output() {
-    std::string out;
-    while (!outbound_.empty() && outbound_.front().first <= board_->now()) {
-      out += outbound_.front().second;
-      outbound_.pop_front();
-    }
-    return out;
-  }
-
   SimPortOptions options_;
   std::unique_ptr<sim::SimBoard> board_;
-  Ticks byte_ticks_ = 0;  // 0: bytes arrive at once
-  Ticks tx_free_at_ = 0;
-  std::deque<std::pair<Ticks, char>> outbound_;
   int journal_fd_;
   std::string journal_path_;
   std::string note_;
@@ -482,17 +451,18 @@ Result<std::unique_ptr<Transport>> open_sim_port(std::string_view url, const Por
   auto board = std::make_unique<sim::SimBoard>(config);
   board->boot();
   if (journal) {
-    // What the board sent back then was read then: only the state matters now.
+    // What the board sent back then was read then, or lost when that command let go: only the
+    // state matters now.
     for (const JournalWrite& write : journal->writes) {
       board->run_until(write.at);
       board->send(write.bytes);
       (void)board->take_output();
     }
     board->run_until(journal->end);
-    (void)board->take_output();
+    board->drop_output();
   }
 
-  auto transport = std::make_unique<SimTransport>(std::move(options), std::move(board), port.baud, fd.release(), path, note);
+  auto transport = std::make_unique<SimTransport>(std::move(options), std::move(board), fd.release(), path, note);
   if (Status traced = transport->open_trace(); !traced) return traced.error();
   return std::unique_ptr<Transport>(std::move(transport));
 }

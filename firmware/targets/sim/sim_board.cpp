@@ -137,7 +137,14 @@ class SimBoard::Hardware final : public hal::StepTimer,
     return byte;
   }
   void write(const uint8_t* bytes, uint32_t count) override {
-    b_.output_.append(reinterpret_cast<const char*>(bytes), count);
+    for (uint32_t i = 0; i < count; ++i) {
+      if (b_.byte_ticks_ == 0) {
+        b_.output_ += static_cast<char>(bytes[i]);
+        continue;
+      }
+      b_.tx_free_at_ = std::max(b_.tx_free_at_, b_.now_) + b_.byte_ticks_;
+      b_.line_out_.push_back({b_.tx_free_at_, bytes[i]});
+    }
     b_.trace_bytes("tx", b_.tx_line_, bytes, count);
   }
 
@@ -156,7 +163,11 @@ const char* state_name(fw::MotorState state) {
   return "unknown";
 }
 
-SimBoard::SimBoard(const SimConfig& config) : config_(config), hardware_(new Hardware(*this)) {
+SimBoard::SimBoard(const SimConfig& config) : hardware_(new Hardware(*this)) {
+  if (config.baud != 0) {
+    // 10 bits per byte (start, 8 data, stop), rounded up to the tick.
+    byte_ticks_ = (uint64_t{10} * hal::kTicksPerSecond + config.baud - 1) / config.baud;
+  }
   for (uint8_t i = 0; i < 3; ++i) {
     axes_[i].config = config.axes[i];
     axes_[i].position = config.axes[i].start;
@@ -187,6 +198,7 @@ Ticks SimBoard::next_event() const {
   Ticks t = std::max(next_poll_, now_);
   if (timer_due_ < t) t = std::max(timer_due_, now_);
   if (!line_in_.empty() && line_in_.front().at < t) t = std::max(line_in_.front().at, now_);
+  if (!line_out_.empty() && line_out_.front().at < t) t = std::max(line_out_.front().at, now_);
   return t;
 }
 
@@ -205,6 +217,12 @@ void SimBoard::run_until(Ticks t) {
         trace_bytes("rx", rx_line_, &byte, 1);
       }
       main_loop();
+    } else if (!line_out_.empty() && line_out_.front().at <= now_) {
+      // Through the wire: the host's to take. The firmware does not see it, so no main loop.
+      while (!line_out_.empty() && line_out_.front().at <= now_) {
+        output_ += static_cast<char>(line_out_.front().byte);
+        line_out_.pop_front();
+      }
     } else {
       main_loop();
     }
@@ -213,7 +231,7 @@ void SimBoard::run_until(Ticks t) {
 }
 
 bool SimBoard::busy() const {
-  if (receiving()) return true;
+  if (receiving() || transmitting()) return true;
   for (uint8_t motor = 1; motor <= 3; ++motor) {
     if (controller_->scheduler().is_running(motor)) return true;
     if (controller_->state(motor) != fw::MotorState::kIdle) return true;
@@ -224,10 +242,7 @@ bool SimBoard::busy() const {
 void SimBoard::send(const std::string& bytes) {
   Ticks at = std::max(now_, wire_free_at_);
   for (const char c : bytes) {
-    if (config_.baud != 0) {
-      // 10 bits per byte (start, 8 data, stop), rounded up to the tick.
-      at += (uint64_t{10} * hal::kTicksPerSecond + config_.baud - 1) / config_.baud;
-    }
+    at += byte_ticks_;
     line_in_.push_back({at, static_cast<uint8_t>(c)});
   }
   wire_free_at_ = at;
@@ -237,6 +252,23 @@ std::string SimBoard::take_output() {
   std::string out;
   out.swap(output_);
   return out;
+}
+
+Ticks SimBoard::next_output() const {
+  if (!output_.empty()) return now_;
+  return line_out_.empty() ? kNever : line_out_.front().at;
+}
+
+std::string SimBoard::take_written() {
+  std::string out = take_output();
+  for (const Arrival& byte : line_out_) out += static_cast<char>(byte.byte);
+  line_out_.clear();
+  return out;
+}
+
+void SimBoard::drop_output() {
+  output_.clear();
+  line_out_.clear();
 }
 
 void SimBoard::force_limit(uint8_t motor, uint8_t end, Force force) {

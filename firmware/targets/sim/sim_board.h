@@ -5,8 +5,8 @@
 // main loop, for a time already past, as the SAMD21 port pends it); three axes that move when
 // their DRV8711 is enabled, by 256/microstep position units per STEP rising edge, the
 // microstep read from the MODE bits the core wrote over SPI; limit switches that close at
-// configured positions; servos, LED strips, buzzer, booting LEDs; a UART whose received bytes
-// arrive at the pace of an emulated baud rate.
+// configured positions; servos, LED strips, buzzer, booting LEDs; a UART whose bytes cross the
+// line both ways at the pace of an emulated baud rate.
 //
 // The main loop (Controller::poll) runs after every received byte, after every switch change,
 // and every kPollTicks otherwise. Nothing here reads the wall clock: run_until() advances
@@ -24,6 +24,7 @@
 //   {"t":T,"ev":"tone","hz":H,"ms":MS}
 //   {"t":T,"ev":"boot_leds","left":B,"right":B}
 //   {"t":T,"ev":"rx","line":"…"}  a line the board received;  {"t":T,"ev":"tx","line":"…"} sent
+//   (at the firmware's write of its end; its bytes then cross the line at the baud rate)
 // T is the virtual time in timer ticks (48 per µs) since power-up.
 #pragma once
 
@@ -59,7 +60,7 @@ struct SimConfig {
   std::array<AxisConfig, 3> axes{{{true, 204800, 0, 409600}, {true, 204800, 0, 409600}, {}}};
   fw::ControllerOptions options{};
   std::array<uint32_t, 3> accel{};  // steps/s² per motor
-  uint32_t baud = 0;                // 0: received bytes arrive at once; else 10 bits per byte
+  uint32_t baud = 0;                // both ways; 0: bytes cross at once, else 10 bits per byte
 };
 
 // A motor state's name in traces, status lines and behaviour vectors.
@@ -79,20 +80,34 @@ class SimBoard {
   void boot();
 
   Ticks now() const { return now_; }
-  // The next time anything happens on its own (timer, byte arrival, main loop); never kNever.
+  // The next time anything happens on its own (timer, byte through the line either way, main
+  // loop); never kNever.
   Ticks next_event() const;
   // Runs the board until virtual time `t` (no-op for a time already past).
   void run_until(Ticks t);
   void run_for(Ticks ticks) { run_until(now_ + ticks); }
-  // True while a motor moves, a move waits, or received bytes are still arriving.
+  // True while a motor moves, a move waits, or bytes are still on the line either way.
   bool busy() const;
   // True while sent bytes are still on the wire or not yet read by the firmware.
   bool receiving() const { return !line_in_.empty() || !uart_rx_.empty(); }
+  // True while bytes the firmware wrote are still on the wire.
+  bool transmitting() const { return !line_out_.empty(); }
 
   // Host → board: bytes queued on the line from now, at the emulated baud rate.
   void send(const std::string& bytes);
-  // Board → host: the bytes written since the last call.
+  // Board → host: the bytes whose stop bit has passed since the last call. The firmware's
+  // writes leave one byte per 10 bit times, each after the one before, from when it wrote them.
   std::string take_output();
+  // When take_output() next has a byte: now() if it has one, else when the next byte on the
+  // wire is through; kNever when every byte written has been taken.
+  Ticks next_output() const;
+  // Every byte the firmware has written and nobody has taken, on the wire or through it: for
+  // checks of what the firmware answered at the moment it answered (the controller fuzzer),
+  // rather than of what a host has read.
+  std::string take_written();
+  // Forgets every byte written, taken or not (a host that was not listening never reads them);
+  // the wire stays busy until they would have been through.
+  void drop_output();
 
   // Injected events (take effect now, as a switch interrupt would).
   void force_limit(uint8_t motor, uint8_t end, Force force);
@@ -152,7 +167,6 @@ class SimBoard {
   void trace_line(const std::string& event_json);
   void trace_bytes(const char* event, std::string& pending, const uint8_t* bytes, uint32_t count);
 
-  SimConfig config_;
   Ticks now_ = 0;
   Ticks timer_due_ = kNever;
   bool in_interrupt_ = false;
@@ -166,10 +180,13 @@ class SimBoard {
   std::array<std::array<uint8_t, 4>, 2> leds_{};
   std::array<bool, 2> boot_leds_{};
   std::vector<Tone> tones_;
+  Ticks byte_ticks_ = 0;          // one byte on the wire; 0: at once
   std::deque<Arrival> line_in_;   // bytes on the wire, not yet received
   std::deque<uint8_t> uart_rx_;   // received, not yet read by the firmware
   Ticks wire_free_at_ = 0;        // when the wire finishes the last queued byte
-  std::string output_;
+  std::deque<Arrival> line_out_;  // written by the firmware, still on the wire
+  Ticks tx_free_at_ = 0;          // when the transmit wire finishes its last byte
+  std::string output_;            // through the wire, not yet taken
   std::string rx_line_, tx_line_;
   bool record_steps_ = false;
   std::array<std::vector<Ticks>, 3> step_times_;

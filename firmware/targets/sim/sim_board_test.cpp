@@ -5,8 +5,11 @@
 #include <catch2/catch.hpp>
 
 #include <sstream>
+#include <utility>
+#include <vector>
 
 using hmc::sim::Force;
+using hmc::sim::kNever;
 using hmc::sim::SimBoard;
 using hmc::sim::SimConfig;
 using hmc::sim::Ticks;
@@ -14,6 +17,8 @@ using hmc::sim::Ticks;
 namespace {
 
 constexpr Ticks kMs = 48000;
+constexpr Ticks kByte = 4167;  // 10 bits at 115200 baud, rounded up to the tick
+const std::string kBootEvent = "STX#3#EVB#2#100#102#ETX\n";
 
 SimConfig quiet_config() {
   SimConfig config;
@@ -42,15 +47,119 @@ TEST_CASE("received bytes arrive at the emulated baud rate") {
   config.baud = 115200;
   SimBoard board(config);
   board.boot();
-  CHECK(board.take_output() == "STX#3#EVB#2#100#102#ETX\n");  // the boot event
   const std::string frame = "STX#6#LED#1#200#120#100#20#185#ETX\n";
   board.send(frame);
-  // 36 bytes at 10 bits each: 3.125 ms. Not answered before the last byte arrives.
+  // 36 bytes at 10 bits each: 3.125 ms. Not answered before the last byte arrives (the boot
+  // event, 24 bytes, is through by then).
   board.run_until(3 * kMs);
-  CHECK(board.take_output().empty());
-  board.run_until(4 * kMs);
+  CHECK(board.take_output() == kBootEvent);
+  // The reply (16 bytes) is through 1.389 ms after that.
+  board.run_until(5 * kMs);
   CHECK(board.take_output() == "STX#1#ACK#0#ETX\n");
   CHECK(board.led(1) == std::array<uint8_t, 4>{200, 120, 100, 20});
+}
+
+TEST_CASE("sent bytes leave at the emulated baud rate, from when the firmware wrote them") {
+  std::ostringstream trace;
+  SimConfig config = quiet_config();
+  config.baud = 115200;
+  SimBoard board(config);
+  board.set_trace(&trace);
+  board.boot();
+  board.run_until(3 * kMs);
+  CHECK(board.take_output() == kBootEvent);
+  CHECK(board.next_output() == kNever);
+  const std::string frame = "STX#6#LED#1#200#120#100#20#185#ETX\n";
+  board.send(frame);
+  // Answered as the frame's last byte arrives; the trace's "tx" is that write.
+  const Ticks written = 3 * kMs + frame.size() * kByte;
+  board.run_until(written);
+  CHECK(trace.str().find("{\"t\":" + std::to_string(written) + ",\"ev\":\"tx\",\"line\":\"STX#1#ACK#0#ETX\"}") !=
+        std::string::npos);
+  const std::string reply = "STX#1#ACK#0#ETX\n";
+  for (size_t i = 0; i < reply.size(); ++i) {
+    const Ticks through = written + (i + 1) * kByte;
+    CHECK(board.next_output() == through);
+    board.run_until(through - 1);
+    CHECK(board.take_output().empty());
+    CHECK(board.busy());
+    board.run_until(through);
+    CHECK(board.take_output() == reply.substr(i, 1));
+  }
+  CHECK(board.next_output() == kNever);
+  CHECK_FALSE(board.busy());
+}
+
+TEST_CASE("a reply written while the wire is busy leaves after the bytes before it") {
+  SimConfig config = quiet_config();
+  config.baud = 115200;
+  SimBoard board(config);
+  board.boot();
+  board.run_until(3 * kMs);
+  (void)board.take_output();
+  // The ACK is written as the frame's end arrives, the NAK of "X" two bytes later, while the
+  // ACK is still on the wire.
+  const std::string frame = "STX#6#LED#1#200#120#100#20#185#ETX\n";
+  board.send(frame + "X\n");
+  const Ticks written = 3 * kMs + frame.size() * kByte;
+  // A run loop that follows next_event() stops at every byte.
+  std::vector<std::pair<Ticks, std::string>> got;
+  while (board.busy()) {
+    board.run_until(board.next_event());
+    if (std::string out = board.take_output(); !out.empty()) got.emplace_back(board.now(), std::move(out));
+  }
+  const std::string replies = "STX#1#ACK#0#ETX\nSTX#4#NAK#3#0#0#3#ETX\n";
+  REQUIRE(got.size() == replies.size());
+  for (size_t i = 0; i < got.size(); ++i) {
+    CHECK(got[i] == std::make_pair(written + (i + 1) * kByte, replies.substr(i, 1)));
+  }
+}
+
+TEST_CASE("with baud 0 sent bytes are there at once") {
+  SimBoard board(quiet_config());
+  board.boot();
+  CHECK(board.next_output() == 0);
+  CHECK(board.take_output() == kBootEvent);
+  CHECK(board.next_output() == kNever);
+  board.run_until(kMs);
+  board.send("STX#6#LED#1#200#120#100#20#185#ETX\n");
+  board.run_until(kMs);  // received and answered at this instant
+  CHECK(board.next_output() == kMs);
+  CHECK(board.take_output() == "STX#1#ACK#0#ETX\n");
+  CHECK_FALSE(board.transmitting());
+  CHECK_FALSE(board.busy());
+}
+
+TEST_CASE("dropped output never arrives, and the wire stays busy until it would have") {
+  SimConfig config = quiet_config();
+  config.baud = 115200;
+  SimBoard board(config);
+  board.boot();  // the boot event (24 bytes) is on the wire until 24 byte times
+  board.run_until(5 * kByte);
+  board.drop_output();
+  CHECK(board.next_output() == kNever);
+  CHECK_FALSE(board.transmitting());
+  // "X" is refused as its end arrives, at 7 byte times: the NAK waits for the boot event's end.
+  board.send("X\n");
+  board.run_until(7 * kByte);
+  CHECK(board.next_output() == 25 * kByte);
+  board.run_until(100 * kByte);
+  CHECK(board.take_output() == "STX#4#NAK#3#0#0#3#ETX\n");
+}
+
+TEST_CASE("take_written gives what the firmware wrote at once, on the wire or not") {
+  SimConfig config = quiet_config();
+  config.baud = 115200;
+  SimBoard board(config);
+  board.boot();
+  board.run_until(5 * kByte);  // the boot event: 5 of its 24 bytes through
+  CHECK(board.take_written() == "STX#3#EVB#2#100#102#ETX\n");
+  CHECK_FALSE(board.transmitting());
+  CHECK(board.take_output().empty());
+  // The wire stays busy for them: a reply written now still leaves after them.
+  board.send("X\n");
+  board.run_until(7 * kByte);
+  CHECK(board.next_output() == 25 * kByte);
 }
 
 TEST_CASE("an axis moves by 256/microstep per step and closes its switch at the configured position") {

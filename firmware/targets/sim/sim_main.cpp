@@ -6,7 +6,6 @@
 #include <time.h>
 
 #include <chrono>
-#include <deque>
 #include <fstream>
 #include <iostream>
 #include <iterator>
@@ -28,7 +27,8 @@ void request_stop(int) { g_stop_requested = 1; }
 
 constexpr Ticks kMillisecond = hal::kTicksPerSecond / 1000u;
 // Real time: while the board is busy, virtual time catches up with the wall clock at least
-// this often, so answers leave within about this long of when the board sends them.
+// this often, and at each byte's stop bit on the transmit wire: an answer's first bytes leave
+// within about this long of when they would, the rest on time.
 constexpr Ticks kBusySlice = kMillisecond;
 // Real time, board idle: nothing reaches the link without input, so the loop only wakes this
 // often, to keep the trace current.
@@ -59,10 +59,8 @@ class Simulator {
         advance_to(board_.now() + kFastSlice);
       } else if (!script_done()) {
         advance_to(script_[next_event_].at);
-      } else if (!outbound_.empty()) {
-        advance_to(next_output());
       }
-      if (!board_.receiving() && outbound_.empty()) link_.input_taken();
+      if (!board_.receiving() && !board_.transmitting()) link_.input_taken();
       if (finished()) break;
       wait();
       if (!options_.fast) advance_to(wall_ticks());  // input is received at the time it came
@@ -76,7 +74,7 @@ class Simulator {
 
   // Standard input's end, or with --exit-when-idle nobody on the link, once nothing is left to do.
   bool finished() const {
-    if (board_.busy() || !script_done() || !outbound_.empty() || !link_.detached()) return false;
+    if (board_.busy() || !script_done() || !link_.detached()) return false;
     return link_.ends_at_detach() || options_.exit_when_idle;
   }
 
@@ -99,40 +97,21 @@ class Simulator {
     send_output();
   }
 
-  // With --baud the board's transmit line is paced too: each byte reaches the host when its stop
-  // bit would, 10 bit times after the one before.
+  // What is through the board's transmit wire (with --baud, each byte when its stop bit is).
   void send_output() {
-    const std::string out = board_.take_output();
-    const uint32_t baud = options_.config.baud;
-    if (baud == 0) {
-      if (!out.empty()) link_.write(out);
-      return;
-    }
-    const Ticks byte_ticks = 10 * hal::kTicksPerSecond / baud;
-    for (const char c : out) {
-      tx_free_at_ = std::max(tx_free_at_, board_.now()) + byte_ticks;
-      outbound_.push_back({tx_free_at_, c});
-    }
-    std::string due;
-    while (!outbound_.empty() && outbound_.front().first <= board_.now()) {
-      due += outbound_.front().second;
-      outbound_.pop_front();
-    }
-    if (!due.empty()) link_.write(due);
+    if (const std::string out = board_.take_output(); !out.empty()) link_.write(out);
   }
-  // When the next byte on the transmit line arrives, or kNever.
-  Ticks next_output() const { return outbound_.empty() ? kNever : outbound_.front().first; }
 
   // How long the wait may last, in ticks of wall time; nullopt: until input.
   std::optional<Ticks> wait_limit() const {
     std::optional<Ticks> limit;
     if (options_.fast) {
-      if (board_.busy() || !script_done() || !outbound_.empty()) limit = 0;
+      if (board_.busy() || !script_done()) limit = 0;
     } else {
       const Ticks now = board_.now();
       Ticks deadline =
           board_.busy() ? std::max(board_.next_event(), now + kBusySlice) : now + kIdleSlice;
-      deadline = std::min(deadline, next_output());
+      deadline = std::min(deadline, board_.next_output());
       if (!script_done()) deadline = std::min(deadline, script_[next_event_].at);
       const Ticks wall = wall_ticks();
       limit = deadline > wall ? deadline - wall : 0;
@@ -196,8 +175,6 @@ class Simulator {
   sigset_t wait_mask_;
   std::chrono::steady_clock::time_point origin_;
   PollSet poll_;
-  std::deque<std::pair<Ticks, char>> outbound_;  // board -> host bytes still on the line
-  Ticks tx_free_at_ = 0;
 };
 
 Result<std::vector<ScriptEvent>> load_script(const std::string& path, int& exit_code) {

@@ -34,10 +34,10 @@ Result<SimPortOptions> parse_sim_url(std::string_view url);
 // ~/.local/state/hmc. Not created here.
 Result<std::string> sim_state_directory();
 
-// Opens the simulated board `url` names (parse_sim_url). options.baud paces the bytes the board
-// receives, as on the wire. Fails when the URL is bad, the state directory cannot be created or
-// written, or another program has the same board open; a journal that cannot be replayed is set
-// aside and the board starts fresh, which description() then says.
+// Opens the simulated board `url` names (parse_sim_url). options.baud paces the bytes both ways,
+// as on the wire. Fails when the URL is bad, the state directory cannot be created or written,
+// or another program has the same board open; a journal that cannot be replayed is set aside
+// and the board starts fresh, which description() then says.
 Result<std::unique_ptr<Transport>> open_sim_port(std::string_view url, const PortOptions& options);
 
 }  // namespace hmc
