@@ -567,16 +567,10 @@ char* write_head(char* w, const Shape& shape, const uint32_t* values, uint32_t& 
 
 }  // namespace
 
-void append_frame_head(std::string& out, const Shape& shape, const uint32_t* values) {
+std::string frame_head(const Shape& shape, const uint32_t* values) {
   char bytes[kFrameBuffer];
   uint32_t sum = 0;
-  out.append(bytes, static_cast<std::size_t>(write_head(bytes, shape, values, sum) - bytes));
-}
-
-std::string frame_head(const Shape& shape, const uint32_t* values) {
-  std::string out;
-  append_frame_head(out, shape, values);
-  return out;
+  return std::string(bytes, static_cast<std::size_t>(write_head(bytes, shape, values, sum) - bytes));
 }
 
 uint32_t checksum_of(const Shape& shape, const uint32_t* values, proto::ChecksumMode mode) {

@@ -98,7 +98,6 @@ std::string crc_text(uint32_t crc);
 std::string write_frame(const Shape& shape, const uint32_t* values, proto::ChecksumMode mode);
 // The same, appended to `out` (no allocation once `out` has the capacity).
 void append_frame(std::string& out, const Shape& shape, const uint32_t* values, proto::ChecksumMode mode);
-void append_frame_head(std::string& out, const Shape& shape, const uint32_t* values);
 
 // The seed's checksum: the values' sum mod 256.
 uint32_t sum_of(const uint32_t* values, uint32_t count);
