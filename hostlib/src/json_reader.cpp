@@ -452,16 +452,4 @@ std::string excerpt(std::string_view text, size_t begin, size_t end, size_t max)
   return out;
 }
 
-const char* kind_name(Value::Kind kind) {
-  switch (kind) {
-    case Value::Kind::kNull: return "null";
-    case Value::Kind::kBool: return "true or false";
-    case Value::Kind::kNumber: return "a number";
-    case Value::Kind::kString: return "a string";
-    case Value::Kind::kArray: return "an array";
-    case Value::Kind::kObject: return "an object";
-  }
-  return "a value";
-}
-
 }  // namespace hmc::json

@@ -74,7 +74,5 @@ std::string path_with_index(const std::string& path, size_t index);
 // The text from `begin` to `end` for messages: blank runs as one space, at most `max` bytes
 // (cut on a character boundary, "..." appended).
 std::string excerpt(std::string_view text, size_t begin, size_t end, size_t max = 40);
-// "a number", "an object", ... for messages.
-const char* kind_name(Value::Kind kind);
 
 }  // namespace hmc::json
