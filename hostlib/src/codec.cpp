@@ -37,7 +37,6 @@ Diagnostic refusal_of(const g::Shape& shape, const uint32_t* values) {
   return std::move(*g::check_values(shape, values, offsets.data()));
 }
 
-// lint() of a command whose values are at hand.
 // Whether any field of the command has advice (STM's delay_us alone, today).
 constexpr bool has_advice(const proto::CommandSpec& spec) {
   for (uint32_t i = 0; i < spec.value_count; ++i) {
@@ -52,6 +51,7 @@ constexpr std::array<bool, sizeof...(I)> advice_table(std::index_sequence<I...>)
 }
 constexpr auto kHasAdvice = advice_table(std::make_index_sequence<proto::kCommandCount>{});
 
+// lint() of a command whose values are at hand.
 std::vector<Warning> lint_values(const proto::CommandSpec& spec, const uint32_t* values, const Command& command) {
   std::vector<Warning> out;
   if (!kHasAdvice[static_cast<std::size_t>(spec.id)] && !std::holds_alternative<SoftLimits>(command)) return out;

@@ -381,8 +381,9 @@ inline bool canonical_digits(const char* first, const char* stop, std::ptrdiff_t
 bool parse_canonical_frame(std::string_view line, proto::ChecksumMode mode, const ShapeTable& table, Frame& out) {
   if (!line.empty() && line.back() == '\n') line.remove_suffix(1);
   if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-  if (line.size() > proto::kLineMax || line.size() < 12 || line.compare(0, 4, "STX#") != 0 ||
-      line.compare(line.size() - 4, 4, "#ETX") != 0) {
+  if (line.size() > proto::kLineMax || line.size() < 12 || line.compare(0, kStart.size(), kStart) != 0 ||
+      line[kStart.size()] != '#' || line.compare(line.size() - kEnd.size(), kEnd.size(), kEnd) != 0 ||
+      line[line.size() - kEnd.size() - 1] != '#') {
     return false;
   }
   const char* const end = line.data() + line.size() - 4;  // the '#' before ETX
@@ -526,9 +527,8 @@ inline char* write_number(char* w, uint32_t n, uint32_t min_digits = 1) {
     *w = static_cast<char>('0' + n);
     return w + 1;
   }
-  uint32_t count = n < 100 ? 2 : n < 1000 ? 3 : n < 10000 ? 4 : n < 100000 ? 5 : n < 1000000 ? 6 : 7;
-  if (n >= 10000000) count = n < 100000000 ? 8 : n < 1000000000 ? 9 : 10;
-  if (n < 10) count = 1;
+  uint32_t count = n < 10 ? 1 : n < 100 ? 2 : n < 1000 ? 3 : n < 10000 ? 4 : n < 100000 ? 5
+                 : n < 1000000 ? 6 : n < 10000000 ? 7 : n < 100000000 ? 8 : n < 1000000000 ? 9 : 10;
   if (count < min_digits) count = min_digits;
   char* const end = w + count;
   char* p = end;
@@ -550,7 +550,8 @@ inline char* write_number(char* w, uint32_t n, uint32_t min_digits = 1) {
 
 // The head of the frame, up to its checksum field; `sum` gets the seed's checksum on the way.
 char* write_head(char* w, const Shape& shape, const uint32_t* values, uint32_t& sum) {
-  w = write_text(w, "STX#");
+  w = write_text(w, kStart);
+  *w++ = '#';
   w = write_number(w, shape.value_count + 1);
   *w++ = '#';
   w = write_text(w, shape.name);
@@ -567,14 +568,12 @@ char* write_head(char* w, const Shape& shape, const uint32_t* values, uint32_t& 
 
 }  // namespace
 
-std::string frame_head(const Shape& shape, const uint32_t* values) {
+uint32_t checksum_of(const Shape& shape, const uint32_t* values, proto::ChecksumMode mode) {
   char bytes[kFrameBuffer];
   uint32_t sum = 0;
-  return std::string(bytes, static_cast<std::size_t>(write_head(bytes, shape, values, sum) - bytes));
-}
-
-uint32_t checksum_of(const Shape& shape, const uint32_t* values, proto::ChecksumMode mode) {
-  return mode == proto::ChecksumMode::kCrc16 ? crc_of(frame_head(shape, values)) : sum_of(values, shape.value_count);
+  const char* end = write_head(bytes, shape, values, sum);
+  return mode == proto::ChecksumMode::kCrc16 ? crc_of(std::string_view(bytes, static_cast<std::size_t>(end - bytes)))
+                                              : sum;
 }
 
 std::string crc_text(uint32_t crc) {
@@ -591,7 +590,8 @@ void append_frame(std::string& out, const Shape& shape, const uint32_t* values, 
   } else {
     w = write_number(w, sum);
   }
-  w = write_text(w, "#ETX");
+  *w++ = '#';
+  w = write_text(w, kEnd);
   out.append(bytes, static_cast<std::size_t>(w - bytes));
 }
 

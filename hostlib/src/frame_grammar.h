@@ -88,8 +88,6 @@ std::optional<Diagnostic> check_values(const Shape& shape, const uint32_t* value
 // Where each value starts in the canonical frame of these values.
 std::array<std::size_t, proto::kMaxValues> canonical_offsets(const Shape& shape, const uint32_t* values);
 
-// The canonical frame's bytes up to its checksum field: "STX#<len>#<NAME>#v1#...#vn#".
-std::string frame_head(const Shape& shape, const uint32_t* values);
 // The checksum field of the canonical frame of these values.
 uint32_t checksum_of(const Shape& shape, const uint32_t* values, proto::ChecksumMode mode);
 // A CRC-16 as the checksum field writes it: exactly proto::kCrcDigits digits, zero-padded.

@@ -137,13 +137,13 @@ class SimBoard::Hardware final : public hal::StepTimer,
     return byte;
   }
   void write(const uint8_t* bytes, uint32_t count) override {
-    for (uint32_t i = 0; i < count; ++i) {
-      if (b_.byte_ticks_ == 0) {
-        b_.output_ += static_cast<char>(bytes[i]);
-        continue;
+    if (b_.byte_ticks_ == 0) {
+      b_.output_.append(reinterpret_cast<const char*>(bytes), count);
+    } else {
+      for (uint32_t i = 0; i < count; ++i) {
+        b_.tx_free_at_ = std::max(b_.tx_free_at_, b_.now_) + b_.byte_ticks_;
+        b_.line_out_.push_back({b_.tx_free_at_, bytes[i]});
       }
-      b_.tx_free_at_ = std::max(b_.tx_free_at_, b_.now_) + b_.byte_ticks_;
-      b_.line_out_.push_back({b_.tx_free_at_, bytes[i]});
     }
     b_.trace_bytes("tx", b_.tx_line_, bytes, count);
   }
