@@ -37,29 +37,37 @@ Diagnostic refusal_of(const g::Shape& shape, const uint32_t* values) {
   return std::move(*g::check_values(shape, values, offsets.data()));
 }
 
-// Whether any field of the command has advice (STM's delay_us alone, today).
-constexpr bool has_advice(const proto::CommandSpec& spec) {
+// The fields of each command that the spec's table gives advice for, as bits (STM's delay_us
+// alone, today): lint() looks at those alone.
+constexpr uint32_t advised_fields(const proto::CommandSpec& spec) {
+  uint32_t bits = 0;
   for (uint32_t i = 0; i < spec.value_count; ++i) {
-    if (spec.fields[i].advised_min != 0 || spec.fields[i].advised_max != 0) return true;
+    if (spec.fields[i].advised_min != 0 || spec.fields[i].advised_max != 0) bits |= 1u << i;
   }
-  return false;
+  return bits;
 }
 
 template <std::size_t... I>
-constexpr std::array<bool, sizeof...(I)> advice_table(std::index_sequence<I...>) {
-  return {has_advice(proto::kCommands[I])...};
+constexpr std::array<uint32_t, sizeof...(I)> advice_table(std::index_sequence<I...>) {
+  return {advised_fields(proto::kCommands[I])...};
 }
-constexpr auto kHasAdvice = advice_table(std::make_index_sequence<proto::kCommandCount>{});
+constexpr auto kAdvisedFields = advice_table(std::make_index_sequence<proto::kCommandCount>{});
+
+// The commands lint() may warn of: those with advice, and LIM (limits that switch themselves off).
+template <std::size_t... I>
+constexpr std::array<bool, sizeof...(I)> linted_table(std::index_sequence<I...>) {
+  return {(kAdvisedFields[I] != 0 || proto::kCommands[I].id == proto::CommandId::kLimits)...};
+}
+constexpr auto kLinted = linted_table(std::make_index_sequence<proto::kCommandCount>{});
 
 // lint() of a command whose values are at hand.
 std::vector<Warning> lint_values(const proto::CommandSpec& spec, const uint32_t* values, const Command& command) {
   std::vector<Warning> out;
-  if (!kHasAdvice[static_cast<std::size_t>(spec.id)] && !std::holds_alternative<SoftLimits>(command)) return out;
   const bool has_action = spec.action_field >= 0;
   const uint32_t action = has_action ? values[static_cast<std::size_t>(spec.action_field)] : 0;
-  for (uint32_t i = 0; i < spec.value_count; ++i) {
+  for (uint32_t bits = kAdvisedFields[static_cast<std::size_t>(spec.id)]; bits != 0; bits &= bits - 1) {
+    const auto i = static_cast<uint32_t>(__builtin_ctz(bits));
     const proto::FieldSpec& f = spec.fields[i];
-    if (f.advised_min == 0 && f.advised_max == 0) continue;
     if (values[i] >= f.advised_min && values[i] <= f.advised_max) continue;
     if (has_action && action == proto::kActionStop && (f.flags & proto::kUncheckedOnStop)) continue;
     if (values[i] == 0 && (f.flags & proto::kZeroAllowedOnHome) && has_action && action == proto::kActionHome) {
@@ -82,11 +90,17 @@ std::vector<Warning> lint_values(const proto::CommandSpec& spec, const uint32_t*
   return out;
 }
 
-// The accepted command of a frame that passed every check.
-Decoded decoded_of(const g::Frame& frame) {
-  Decoded out{command_of(*frame.shape, frame.values.data()), frame.canonical, {}};
-  const auto id = static_cast<proto::CommandId>(g::command_shapes().index_of(*frame.shape));
-  out.warnings = lint_values(proto::command_spec(id), frame.values.data(), out.command);
+// The accepted command of a frame that passed every check, made where the caller receives it:
+// moving a command just written costs more than writing it.
+Result<Decoded, Diagnostic> accepted(const g::Shape& shape, const uint32_t* values, bool canonical) {
+  Result<Decoded, Diagnostic> out{std::in_place};
+  Decoded& decoded = *out;
+  const auto id = static_cast<proto::CommandId>(g::command_shapes().index_of(shape));
+  set_command(decoded.command, id, values);
+  decoded.canonical = canonical;
+  if (kLinted[static_cast<std::size_t>(id)]) {
+    decoded.warnings = lint_values(proto::command_spec(id), values, decoded.command);
+  }
   return out;
 }
 
@@ -104,24 +118,22 @@ uint32_t checksum(const Command& command, proto::ChecksumMode mode) {
 Result<Decoded, Diagnostic> decode(std::string_view line, proto::ChecksumMode mode) {
   // The common case in one pass; anything else (a refusal, blanks, leading zeros) is judged
   // and explained step by step below.
-  g::Frame fast;
-  if (g::parse_canonical_frame(line, mode, g::command_shapes(), fast) &&
-      g::values_valid(*fast.shape, fast.values.data())) {
-    return decoded_of(fast);
-  }
+  std::array<uint32_t, proto::kMaxValues> values{};
+  const g::Shape* shape = g::parse_canonical_frame(line, mode, g::command_shapes(), values);
+  if (shape != nullptr && g::values_valid(*shape, values)) return accepted(*shape, values.data(), true);
   auto frame = g::parse_frame(line, mode, g::command_shapes());
   if (!frame) return frame.error();
   // 15-16. Ranges and rules.
   if (auto refusal = g::check_values(*frame->shape, frame->values.data(), frame->offsets.data())) {
     return std::move(*refusal);
   }
-  return decoded_of(*frame);
+  return accepted(*frame->shape, frame->values.data(), frame->canonical);
 }
 
 Result<Command, Diagnostic> validate(const Command& command) {
   const g::Shape& shape = shape_of(command);
   const CommandValues v = command_values(command);
-  if (g::values_valid(shape, v.values.data())) return command;
+  if (g::values_valid(shape, v.values)) return command;
   return refusal_of(shape, v.values.data());
 }
 
@@ -139,7 +151,7 @@ Result<std::string, Diagnostic> encode(const Command& command, proto::ChecksumMo
 Result<std::size_t, Diagnostic> encode_into(const Command& command, std::string& out, proto::ChecksumMode mode) {
   const g::Shape& shape = shape_of(command);
   const CommandValues v = command_values(command);
-  if (!g::values_valid(shape, v.values.data())) return refusal_of(shape, v.values.data());
+  if (!g::values_valid(shape, v.values)) return refusal_of(shape, v.values.data());
   out.clear();
   g::append_frame(out, shape, v.values.data(), mode);
   return out.size();

@@ -3,6 +3,11 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <array>
+#include <string>
+#include <vector>
+
 using hmc::decode;
 using hmc::proto::Reason;
 
@@ -287,4 +292,42 @@ TEST_CASE("unknown names list the commands and point at the other direction") {
   CHECK(d.reason == Reason::kUnknownCommand);
   CHECK(d.message.find("STM, SVM, LED, VER, STA, SET, GET, LIM and CRC") != std::string::npos);
   CHECK(d.message.find("ACK is one of the board frames") != std::string::npos);
+}
+
+TEST_CASE("every number is written and read back digit for digit, whatever its length") {
+  // Values at every digit count and group boundary, and zeros inside groups ("1000005").
+  std::vector<uint32_t> values = {0, 1, 9, 10, 99, 100, 999, 1000, 1001, 9999, 10000, 100000, 999999, 1000000,
+                                  1000005, 12345678, 99999999, 100000000, 999999999, 1000000000, 2000000999,
+                                  2147483647};
+  for (uint32_t v = 1; v < 2147483647u / 7; v = v * 7 + 3) values.push_back(v);
+  for (const uint32_t steps : values) {
+    INFO("steps " << steps);
+    const hmc::StepperMove move{2, 1, 16, steps, 700};
+    const std::string expected = "STX#6#STM#2#1#16#" + std::to_string(steps) + "#700#" +
+                                 std::to_string((2 + 1 + 16 + steps + 700) % 256) + "#ETX";
+    const auto frame = hmc::encode(move);
+    REQUIRE(frame.ok());
+    CHECK(*frame == expected);
+    const auto back = decode(*frame);
+    REQUIRE(back.ok());
+    CHECK(back->canonical);
+    CHECK(std::get<hmc::StepperMove>(back->command) == move);
+  }
+}
+
+TEST_CASE("CRC-16 checksum fields are five digits for CRCs of every width") {
+  using hmc::proto::ChecksumMode;
+  std::array<int, 5> seen{};  // CRCs of 1, 2, 3, 4 and 5 digits
+  for (uint32_t k = 0; k < 300000 && std::count(seen.begin(), seen.end(), 0) > 0; ++k) {
+    const hmc::LedColor colour{1 + k % 2, k % 256, (k / 256) % 256, (k / 65536) % 256, 7};
+    const uint32_t crc = hmc::checksum(colour, ChecksumMode::kCrc16);
+    const std::string digits = std::to_string(crc);
+    ++seen[digits.size() - 1];
+    const auto frame = hmc::encode(colour, ChecksumMode::kCrc16);
+    REQUIRE(frame.ok());
+    const std::string field = frame->substr(frame->size() - 9, 6);  // "ddddd#" before "ETX"
+    REQUIRE(field == std::string(5 - digits.size(), '0') + digits + "#");
+    REQUIRE(decode(*frame, ChecksumMode::kCrc16).ok());
+  }
+  CHECK(std::count(seen.begin(), seen.end(), 0) == 0);
 }

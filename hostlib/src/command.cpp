@@ -64,25 +64,33 @@ static_assert(std::variant_size_v<Command> == proto::kCommandCount, "one Command
 static_assert(variant_follows_table(std::make_index_sequence<std::variant_size_v<Command>>{}),
               "Command's alternatives are ordered by CommandId and hold the table's values");
 
+// Member by member, each a constant of the fold (a loop over the member pointers would leave
+// them to run time, and the struct to be written through memory a field at a time).
+template <typename T, std::size_t... I>
+T from_values(const uint32_t* values, std::index_sequence<I...>) {
+  T out{};
+  ((out.*(Layout<T>::kFields[I]) = values[I]), ...);
+  return out;
+}
 template <typename T>
 T from_values(const uint32_t* values) {
-  T out{};
-  std::size_t i = 0;
-  for (auto member : Layout<T>::kFields) out.*member = values[i++];
+  return from_values<T>(values, std::make_index_sequence<Layout<T>::kFields.size()>{});
+}
+
+template <typename T, std::size_t... I>
+CommandValues values_of(const T& typed, std::index_sequence<I...>) {
+  CommandValues out;
+  ((out.values[I] = typed.*(Layout<T>::kFields[I])), ...);
+  out.count = sizeof...(I);
   return out;
 }
 
-template <std::size_t I>
-Command make_one(const uint32_t* values) {
-  return Command(std::in_place_index<I>, from_values<std::variant_alternative_t<I, Command>>(values));
-}
-
-// One maker per alternative, indexed by CommandId: a single indirect call builds the command.
+// Makes `out` the alternative `id` names, in place: one comparison per alternative before it
+// (the common commands come first) rather than an indirect call.
 template <std::size_t... I>
-constexpr std::array<Command (*)(const uint32_t*), sizeof...(I)> makers(std::index_sequence<I...>) {
-  return {&make_one<I>...};
+void set_alternative(Command& out, std::size_t id, const uint32_t* values, std::index_sequence<I...>) {
+  (void)((id == I && (out.emplace<I>(from_values<std::variant_alternative_t<I, Command>>(values)), true)) || ...);
 }
-constexpr auto kMakers = makers(std::make_index_sequence<std::variant_size_v<Command>>{});
 
 }  // namespace
 
@@ -97,15 +105,20 @@ const proto::CommandSpec& command_spec(const Command& command) {
 CommandValues command_values(const Command& command) {
   return std::visit(
       [](const auto& typed) {
-        CommandValues out;
-        for (auto member : Layout<std::decay_t<decltype(typed)>>::kFields) out.values[out.count++] = typed.*member;
-        return out;
+        using T = std::decay_t<decltype(typed)>;
+        return values_of(typed, std::make_index_sequence<Layout<T>::kFields.size()>{});
       },
       command);
 }
 
+void set_command(Command& out, proto::CommandId id, const uint32_t* values) {
+  set_alternative(out, static_cast<std::size_t>(id), values, std::make_index_sequence<std::variant_size_v<Command>>{});
+}
+
 Command make_command(proto::CommandId id, const uint32_t* values) {
-  return kMakers[static_cast<std::size_t>(id)](values);
+  Command out;
+  set_command(out, id, values);
+  return out;
 }
 
 const proto::CommandSpec* find_command(std::string_view name) {

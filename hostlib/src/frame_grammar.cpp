@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cstring>
 #include <utility>
 
 namespace hmc::grammar {
@@ -25,11 +26,31 @@ constexpr uint32_t packed_name(std::string_view name) {
          static_cast<uint32_t>(static_cast<unsigned char>(name[2])) << 16;
 }
 
+// The grammar's view of one table entry; `action_field` is -1 for board frames.
+constexpr Shape shape_of(std::string_view name, uint32_t value_count, const proto::FieldSpec* fields,
+                         int action_field) {
+  Shape out{name, value_count, fields, action_field, packed_name(name), {}, {}, 0, false, {}, 0};
+  const auto put = [&out](char c) { out.head[out.head_size++] = c; };
+  for (const char c : kStart) put(c);
+  put('#');
+  put(static_cast<char>('0' + value_count + 1));  // a frame has at most 9 fields after the length
+  put('#');
+  for (const char c : name) put(c);
+  put('#');
+  for (uint32_t i = 0; i < value_count; ++i) {
+    out.min[i] = fields[i].min;
+    out.span[i] = fields[i].max - fields[i].min;
+    if (fields[i].flags & proto::kPowerOfTwo) out.power_of_two |= 1u << i;
+    if (fields[i].flags & proto::kSettingValue) out.ranged_by_setting = true;
+  }
+  return out;
+}
+
 template <std::size_t N>
 constexpr std::array<Shape, N> shapes_of(const proto::CommandSpec (&specs)[N]) {
   std::array<Shape, N> out{};
   for (std::size_t i = 0; i < N; ++i) {
-    out[i] = {specs[i].name, specs[i].value_count, specs[i].fields, specs[i].action_field, packed_name(specs[i].name)};
+    out[i] = shape_of(specs[i].name, specs[i].value_count, specs[i].fields, specs[i].action_field);
   }
   return out;
 }
@@ -37,14 +58,28 @@ constexpr std::array<Shape, N> shapes_of(const proto::CommandSpec (&specs)[N]) {
 template <std::size_t N>
 constexpr std::array<Shape, N> shapes_of(const proto::BoardFrameSpec (&specs)[N]) {
   std::array<Shape, N> out{};
-  for (std::size_t i = 0; i < N; ++i) {
-    out[i] = {specs[i].name, specs[i].value_count, specs[i].fields, -1, packed_name(specs[i].name)};
-  }
+  for (std::size_t i = 0; i < N; ++i) out[i] = shape_of(specs[i].name, specs[i].value_count, specs[i].fields, -1);
   return out;
 }
 
 constexpr auto kCommandShapes = shapes_of(proto::kCommands);
 constexpr auto kBoardFrameShapes = shapes_of(proto::kBoardFrames);
+
+// Every name is three letters and every head fits its array (a longer name would need both
+// find() and Shape::head to change).
+template <std::size_t N>
+constexpr bool three_letter_names(const std::array<Shape, N>& shapes) {
+  for (const Shape& shape : shapes) {
+    if (shape.key == 0 || shape.head_size < 8 || shape.head_size > 12) return false;
+  }
+  return true;
+}
+static_assert(three_letter_names(kCommandShapes) && three_letter_names(kBoardFrameShapes),
+              "names are three letters and heads 8-12 bytes: find() and parse_canonical_frame() rely on it");
+
+constexpr ShapeTable kCommandTable{kCommandShapes.data(), kCommandShapes.size(), "command", "commands"};
+constexpr ShapeTable kBoardFrameTable{kBoardFrameShapes.data(), kBoardFrameShapes.size(), "board frame",
+                                      "board frames"};
 
 struct Token {
   std::string_view text;
@@ -137,16 +172,10 @@ std::string quote(std::string_view s) {
 }
 
 const Shape* ShapeTable::find(std::string_view name) const {
-  // Names are three letters: compared as one number, without a call per name.
-  if (name.size() == 3) {
-    const uint32_t key = packed_name(name);
-    for (std::size_t i = 0; i < count; ++i) {
-      if (shapes[i].key == key) return &shapes[i];
-    }
-    return nullptr;
-  }
-  for (std::size_t i = 0; i < count; ++i) {
-    if (shapes[i].name == name) return &shapes[i];
+  // Names are three letters (static_assert above): compared as one number each.
+  const uint32_t key = packed_name(name);
+  for (std::size_t i = 0; i < count && key != 0; ++i) {
+    if (shapes[i].key == key) return &shapes[i];
   }
   return nullptr;
 }
@@ -160,15 +189,8 @@ std::string ShapeTable::names() const {
   return out;
 }
 
-const ShapeTable& command_shapes() {
-  static const ShapeTable table{kCommandShapes.data(), kCommandShapes.size(), "command", "commands"};
-  return table;
-}
-
-const ShapeTable& board_frame_shapes() {
-  static const ShapeTable table{kBoardFrameShapes.data(), kBoardFrameShapes.size(), "board frame", "board frames"};
-  return table;
-}
+const ShapeTable& command_shapes() { return kCommandTable; }
+const ShapeTable& board_frame_shapes() { return kBoardFrameTable; }
 
 Diagnostic refuse(Reason reason, int token, std::size_t offset, std::string field, std::string message,
                   uint32_t expected, uint32_t found) {
@@ -360,8 +382,8 @@ namespace {
 
 // Reads the run of digits at `p` into `value` and returns where it stops. The line's "#ETX"
 // stops every run before the line ends, so the loop needs no bound of its own; a run longer
-// than 10 digits wraps `value`, and the caller refuses it for its length.
-inline const char* read_digits(const char* p, uint64_t& value) {
+// than 9 digits may wrap `value`, and the caller refuses it for its length.
+inline const char* read_digits(const char* p, uint32_t& value) {
   value = 0;
   for (unsigned digit = static_cast<unsigned char>(*p) - '0'; digit <= 9;
        digit = static_cast<unsigned char>(*++p) - '0') {
@@ -370,59 +392,66 @@ inline const char* read_digits(const char* p, uint64_t& value) {
   return p;
 }
 
-// A canonical number: 1 to `max_digits` digits, no leading zero.
+// A canonical number of 1 to `max_digits` digits (at most 9: ten-digit values are left to the
+// step-by-step reading, which also bounds them), no leading zero.
 inline bool canonical_digits(const char* first, const char* stop, std::ptrdiff_t max_digits) {
   const std::ptrdiff_t digits = stop - first;
   return digits >= 1 && digits <= max_digits && (digits == 1 || *first != '0');
 }
 
+// Eight bytes, for comparing them at once.
+inline uint64_t load8(const char* p) {
+  uint64_t x = 0;
+  std::memcpy(&x, p, sizeof x);
+  return x;
+}
+
 }  // namespace
 
-bool parse_canonical_frame(std::string_view line, proto::ChecksumMode mode, const ShapeTable& table, Frame& out) {
+const Shape* parse_canonical_frame(std::string_view line, proto::ChecksumMode mode, const ShapeTable& table,
+                                   std::array<uint32_t, proto::kMaxValues>& values) {
   if (!line.empty() && line.back() == '\n') line.remove_suffix(1);
   if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-  if (line.size() > proto::kLineMax || line.size() < 12 || line.compare(0, kStart.size(), kStart) != 0 ||
-      line[kStart.size()] != '#' || line.compare(line.size() - kEnd.size(), kEnd.size(), kEnd) != 0 ||
-      line[line.size() - kEnd.size() - 1] != '#') {
-    return false;
+  if (line.size() > proto::kLineMax || line.size() < 12 ||
+      line.compare(line.size() - kEnd.size(), kEnd.size(), kEnd) != 0 || line[line.size() - kEnd.size() - 1] != '#') {
+    return nullptr;
   }
-  const char* const end = line.data() + line.size() - 4;  // the '#' before ETX
-  // Length: one digit (a frame has at most kMaxValues + 1 = 9 fields), then the name.
-  const char* p = line.data() + 4;
-  if (p[0] < '1' || p[0] > '9' || p[1] != '#') return false;
-  const auto length = static_cast<uint32_t>(p[0] - '0');
-  const char* const name = p + 2;
-  for (p = name; *p != '#';) ++p;  // the '#' before ETX stops it
-  if (p >= end) return false;
-  const Shape* shape = table.find(std::string_view(name, static_cast<std::size_t>(p - name)));
-  if (shape == nullptr || length != shape->value_count + 1u) return false;
-  ++p;
+  const char* const end = line.data() + line.size() - kEnd.size() - 1;  // the '#' before ETX
+  // "STX#<length>#<NAME>#": the name is the three bytes after "STX#" and a one-digit length (a
+  // frame has at most kMaxValues + 1 = 9 fields), and the whole head must be its shape's. The
+  // head is 8-12 bytes (static_assert above) and the line at least 12: two overlapping loads of
+  // eight compare it.
+  const Shape* shape = table.find(line.substr(kStart.size() + 3, 3));
+  if (shape == nullptr || load8(line.data()) != load8(shape->head.data()) ||
+      load8(line.data() + shape->head_size - 8) != load8(shape->head.data() + shape->head_size - 8)) {
+    return nullptr;
+  }
+  // Values: each a canonical run of digits and a '#'. Reading stays within the line: a run
+  // stops at the '#' before ETX or at 'E', and a value that should follow the last '#' finds
+  // 'E' and no digits.
+  const char* p = line.data() + shape->head_size;
   uint32_t sum = 0;
   for (uint32_t i = 0; i < shape->value_count; ++i) {
-    uint64_t value = 0;
+    uint32_t value = 0;
     const char* const first = p;
     p = read_digits(p, value);
-    if (p >= end || *p != '#' || !canonical_digits(first, p, proto::kMaxDigits) || value > proto::kIntMax) {
-      return false;
-    }
-    out.values[i] = static_cast<uint32_t>(value);
-    sum += static_cast<uint32_t>(value);
+    if (*p != '#' || !canonical_digits(first, p, 9)) return nullptr;
+    values[i] = value;
+    sum += value;
     ++p;
   }
-  uint64_t given = 0;
+  uint32_t given = 0;
   const char* const checksum_at = p;
   p = read_digits(p, given);
-  if (p != end) return false;
+  if (p != end) return nullptr;
   if (mode == proto::ChecksumMode::kCrc16) {
     // Exactly kCrcDigits digits, zero-padded.
     const std::string_view covered(line.data(), static_cast<std::size_t>(checksum_at - line.data()));
-    if (p - checksum_at != proto::kCrcDigits || given != crc_of(covered)) return false;
+    if (p - checksum_at != proto::kCrcDigits || given != crc_of(covered)) return nullptr;
   } else if (!canonical_digits(checksum_at, p, 3) || given != (sum & 0xFFu)) {
-    return false;
+    return nullptr;
   }
-  out.shape = shape;
-  out.canonical = true;
-  return true;
+  return shape;
 }
 
 namespace {
@@ -504,65 +533,70 @@ std::array<std::size_t, proto::kMaxValues> canonical_offsets(const Shape& shape,
 
 namespace {
 
-constexpr char kDigitPairs[] =
-    "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
-    "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
-    "8081828384858687888990919293949596979899";
-
 // Frames are written into a buffer on the stack, then appended to a string in one go. A
-// frame is at most 121 bytes (protocol_facts.h, kLineMax); kFrameBuffer also holds a name of
-// up to kLineMax bytes. The writers take and return the write position (a local pointer, so
-// the compiler need not fear that the bytes written alias it).
-constexpr std::size_t kFrameBuffer = 2 * proto::kLineMax + proto::kMaxValues * (proto::kMaxDigits + 1) + 32;
+// frame is at most kLineMax bytes. The writers take and return the write position (a local
+// pointer, so the compiler need not fear that the bytes written alias it).
+constexpr std::size_t kFrameBuffer = proto::kLineMax + 32;
 
-char* write_text(char* w, std::string_view s) {
-  for (const char c : s) *w++ = c;  // a few bytes: a loop beats a call to memcpy
-  return w;
+// Numbers are written three digits at a time from two tables of 1 000 four-byte entries, each
+// copied whole: kGroups[n] holds n without leading zeros and a '#' ("7#", "42#", "255#"),
+// kPaddedGroups[n] three digits and a '#' ("007#"). A field is a number and its '#'.
+using Group = std::array<char, 4>;
+
+constexpr std::array<Group, 1000> groups(bool padded) {
+  std::array<Group, 1000> out{};
+  for (uint32_t n = 0; n < 1000; ++n) {
+    const uint32_t digits = padded ? 3 : n < 10 ? 1 : n < 100 ? 2 : 3;
+    for (uint32_t i = 0, place = digits == 3 ? 100 : digits == 2 ? 10 : 1; i < digits; ++i, place /= 10) {
+      out[n][i] = static_cast<char>('0' + n / place % 10);
+    }
+    out[n][digits] = '#';
+  }
+  return out;
+}
+constexpr auto kGroups = groups(false);
+constexpr auto kPaddedGroups = groups(true);
+
+// The bytes of kGroups[n]: its digits and the '#'.
+inline uint32_t group_size(uint32_t n) { return 2u + (n >= 10 ? 1u : 0u) + (n >= 100 ? 1u : 0u); }
+
+// n and a '#'. Writes four bytes past the position it returns at most.
+inline char* write_field(char* w, uint32_t n) {
+  if (n < 1000) {  // most fields
+    std::memcpy(w, kGroups[n].data(), 4);
+    return w + group_size(n);
+  }
+  uint32_t low[3];  // the groups after the first, last one first (n < 2^32 has at most four)
+  uint32_t count = 0;
+  for (; n >= 1000; n /= 1000) low[count++] = n % 1000;
+  std::memcpy(w, kGroups[n].data(), 4);
+  w += group_size(n) - 1;  // the next group overwrites the '#'
+  while (count > 0) {
+    std::memcpy(w, kPaddedGroups[low[--count]].data(), 4);
+    w += 3;
+  }
+  return w + 1;
 }
 
-// Decimal digits of `n`, zero-padded to `min_digits` (at most 10), from the last digit back,
-// two at a time.
-inline char* write_number(char* w, uint32_t n, uint32_t min_digits = 1) {
-  if (n < 10 && min_digits <= 1) {  // motors, directions, lengths: most fields are one digit
-    *w = static_cast<char>('0' + n);
-    return w + 1;
-  }
-  uint32_t count = n < 10 ? 1 : n < 100 ? 2 : n < 1000 ? 3 : n < 10000 ? 4 : n < 100000 ? 5
-                 : n < 1000000 ? 6 : n < 10000000 ? 7 : n < 100000000 ? 8 : n < 1000000000 ? 9 : 10;
-  if (count < min_digits) count = min_digits;
-  char* const end = w + count;
-  char* p = end;
-  while (n >= 100) {
-    const uint32_t pair = (n % 100) * 2;
-    n /= 100;
-    *--p = kDigitPairs[pair + 1];
-    *--p = kDigitPairs[pair];
-  }
-  if (n >= 10) {
-    *--p = kDigitPairs[n * 2 + 1];
-    *--p = kDigitPairs[n * 2];
-  } else {
-    *--p = static_cast<char>('0' + n);
-  }
-  while (p != w) *--p = '0';
-  return end;
+// A CRC-16 as the checksum field holds it, kCrcDigits = 5 digits zero-padded, and a '#'.
+inline char* write_crc_field(char* w, uint32_t crc) {
+  static_assert(proto::kCrcDigits == 5, "two digits, then a padded group of three");
+  std::memcpy(w, kPaddedGroups[crc / 1000].data() + 1, 2);
+  std::memcpy(w + 2, kPaddedGroups[crc % 1000].data(), 4);
+  return w + 6;
 }
 
-// The head of the frame, up to its checksum field; `sum` gets the seed's checksum on the way.
+// The head of the frame through the '#' before its first value (or checksum), then the values;
+// `sum` gets the seed's checksum on the way.
 char* write_head(char* w, const Shape& shape, const uint32_t* values, uint32_t& sum) {
-  w = write_text(w, kStart);
-  *w++ = '#';
-  w = write_number(w, shape.value_count + 1);
-  *w++ = '#';
-  w = write_text(w, shape.name);
-  sum = 0;
+  std::memcpy(w, shape.head.data(), shape.head.size());
+  w += shape.head_size;
+  uint32_t total = 0;
   for (uint32_t i = 0; i < shape.value_count; ++i) {
-    *w++ = '#';
-    w = write_number(w, values[i]);
-    sum += values[i];
+    w = write_field(w, values[i]);
+    total += values[i];
   }
-  *w++ = '#';
-  sum &= 0xFFu;
+  sum = total & 0xFFu;
   return w;
 }
 
@@ -577,22 +611,19 @@ uint32_t checksum_of(const Shape& shape, const uint32_t* values, proto::Checksum
 }
 
 std::string crc_text(uint32_t crc) {
-  char digits[proto::kMaxDigits];
-  return std::string(digits, static_cast<std::size_t>(write_number(digits, crc, proto::kCrcDigits) - digits));
+  char field[8];
+  return std::string(field, static_cast<std::size_t>(write_crc_field(field, crc) - field - 1));
 }
 
 void append_frame(std::string& out, const Shape& shape, const uint32_t* values, proto::ChecksumMode mode) {
   char bytes[kFrameBuffer];
   uint32_t sum = 0;
   char* w = write_head(bytes, shape, values, sum);
-  if (mode == proto::ChecksumMode::kCrc16) {
-    w = write_number(w, crc_of(std::string_view(bytes, static_cast<std::size_t>(w - bytes))), proto::kCrcDigits);
-  } else {
-    w = write_number(w, sum);
-  }
-  *w++ = '#';
-  w = write_text(w, kEnd);
-  out.append(bytes, static_cast<std::size_t>(w - bytes));
+  w = mode == proto::ChecksumMode::kCrc16
+          ? write_crc_field(w, crc_of(std::string_view(bytes, static_cast<std::size_t>(w - bytes))))
+          : write_field(w, sum);
+  std::memcpy(w, kEnd.data(), kEnd.size());
+  out.append(bytes, static_cast<std::size_t>(w + kEnd.size() - bytes));
 }
 
 std::string write_frame(const Shape& shape, const uint32_t* values, proto::ChecksumMode mode) {

@@ -24,6 +24,14 @@ struct Shape {
   const proto::FieldSpec* fields;
   int action_field;  // -1: none
   uint32_t key;      // a three-letter name packed into a number (0: another length)
+  // The fields' own ranges as value - min <= span, for the check without a branch per value.
+  std::array<uint32_t, proto::kMaxValues> min;
+  std::array<uint32_t, proto::kMaxValues> span;
+  uint32_t power_of_two;   // bit i: value i must be a power of two
+  bool ranged_by_setting;  // a value's range is given by the setting the one before names
+  // The frame up to its first value, "STX#6#STM#", which the writer copies in one go.
+  std::array<char, 16> head;
+  uint32_t head_size;
 };
 
 // The frames one side may send, and how messages call them.
@@ -66,10 +74,12 @@ Diagnostic unknown_name(const ShapeTable& table, std::string_view name, std::siz
 Result<Frame, Diagnostic> parse_frame(std::string_view line, proto::ChecksumMode mode, const ShapeTable& table);
 
 // Steps 1-14 in one pass for the common case: a canonical frame (nothing around it, no leading
-// zeros) whose every step passes. Fills shape and values and returns true; returns false for
-// anything else, which parse_frame() then judges and explains. It never accepts a line that
-// parse_frame() refuses or reads differently (the host_decode fuzzer checks this).
-bool parse_canonical_frame(std::string_view line, proto::ChecksumMode mode, const ShapeTable& table, Frame& out);
+// zeros, values of at most 9 digits) whose every step passes. Returns its shape and fills
+// `values`; returns nullptr for anything else, which parse_frame() then judges and explains.
+// It never accepts a line that parse_frame() refuses or reads differently (the host_decode
+// fuzzer checks this).
+const Shape* parse_canonical_frame(std::string_view line, proto::ChecksumMode mode, const ShapeTable& table,
+                                   std::array<uint32_t, proto::kMaxValues>& values);
 
 // Steps 15-16: ranges left to right under the action's exemptions and the setting's range, then
 // the switch rule. The first value that fails, and why (kOutOfRange or kNoSwitch; kOk: none).
@@ -78,8 +88,24 @@ struct ValueFault {
   uint32_t index;  // of the value
 };
 ValueFault find_fault(const Shape& shape, const uint32_t* values);
-inline bool values_valid(const Shape& shape, const uint32_t* values) {
-  return find_fault(shape, values).reason == proto::Reason::kOk;
+// Whether find_fault() finds nothing, the common case decided without a branch per value:
+// every value within its field's own range (a power of two where it must be) passes unless a
+// setting gives the range or the switch rule applies.
+// The values are read one by one (value_count of them): they were written so just before, and
+// reading several at once would wait for those writes to reach memory.
+inline bool values_valid(const Shape& shape, const std::array<uint32_t, proto::kMaxValues>& values) {
+  uint32_t outside = 0;
+  for (uint32_t i = 0; i < shape.value_count; ++i) {
+    outside |= static_cast<uint32_t>(values[i] - shape.min[i] > shape.span[i]);
+  }
+  for (uint32_t bits = shape.power_of_two; bits != 0; bits &= bits - 1) {
+    const uint32_t v = values[static_cast<std::size_t>(__builtin_ctz(bits))];
+    outside |= v & (v - 1);
+  }
+  const bool homing =
+      shape.action_field >= 0 && values[static_cast<std::size_t>(shape.action_field)] == proto::kActionHome;
+  if (outside == 0 && !shape.ranged_by_setting && !homing) return true;
+  return find_fault(shape, values.data()).reason == proto::Reason::kOk;
 }
 // find_fault() explained: `offsets[i]` is where value i starts in the text the diagnostic
 // refers to. Nothing when the values pass.

@@ -111,6 +111,8 @@ CommandValues command_values(const Command& command);
 // Builds a command from its values in wire order; `values` holds spec.value_count entries
 // (none for VER, so it may then be null).
 Command make_command(proto::CommandId id, const uint32_t* values);
+// The same, made in `out` in place (no copy for a command read back at once).
+void set_command(Command& out, proto::CommandId id, const uint32_t* values);
 
 // The command table entry with this wire name, or nullptr.
 const proto::CommandSpec* find_command(std::string_view name);
