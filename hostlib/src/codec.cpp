@@ -120,7 +120,7 @@ Result<Decoded, Diagnostic> decode(std::string_view line, proto::ChecksumMode mo
   // and explained step by step below.
   std::array<uint32_t, proto::kMaxValues> values{};
   const g::Shape* shape = g::parse_canonical_frame(line, mode, g::command_shapes(), values);
-  if (shape != nullptr && g::values_valid(*shape, values)) return accepted(*shape, values.data(), true);
+  if (shape != nullptr && g::values_valid(*shape, values.data())) return accepted(*shape, values.data(), true);
   auto frame = g::parse_frame(line, mode, g::command_shapes());
   if (!frame) return frame.error();
   // 15-16. Ranges and rules.
@@ -133,7 +133,7 @@ Result<Decoded, Diagnostic> decode(std::string_view line, proto::ChecksumMode mo
 Result<Command, Diagnostic> validate(const Command& command) {
   const g::Shape& shape = shape_of(command);
   const CommandValues v = command_values(command);
-  if (g::values_valid(shape, v.values)) return command;
+  if (g::values_valid(shape, v.values.data())) return command;
   return refusal_of(shape, v.values.data());
 }
 
@@ -151,7 +151,7 @@ Result<std::string, Diagnostic> encode(const Command& command, proto::ChecksumMo
 Result<std::size_t, Diagnostic> encode_into(const Command& command, std::string& out, proto::ChecksumMode mode) {
   const g::Shape& shape = shape_of(command);
   const CommandValues v = command_values(command);
-  if (!g::values_valid(shape, v.values)) return refusal_of(shape, v.values.data());
+  if (!g::values_valid(shape, v.values.data())) return refusal_of(shape, v.values.data());
   out.clear();
   g::append_frame(out, shape, v.values.data(), mode);
   return out.size();

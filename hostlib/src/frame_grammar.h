@@ -93,19 +93,18 @@ ValueFault find_fault(const Shape& shape, const uint32_t* values);
 // setting gives the range or the switch rule applies.
 // The values are read one by one (value_count of them): they were written so just before, and
 // reading several at once would wait for those writes to reach memory.
-inline bool values_valid(const Shape& shape, const std::array<uint32_t, proto::kMaxValues>& values) {
+inline bool values_valid(const Shape& shape, const uint32_t* values) {
   uint32_t outside = 0;
   for (uint32_t i = 0; i < shape.value_count; ++i) {
     outside |= static_cast<uint32_t>(values[i] - shape.min[i] > shape.span[i]);
   }
   for (uint32_t bits = shape.power_of_two; bits != 0; bits &= bits - 1) {
-    const uint32_t v = values[static_cast<std::size_t>(__builtin_ctz(bits))];
+    const uint32_t v = values[__builtin_ctz(bits)];
     outside |= v & (v - 1);
   }
-  const bool homing =
-      shape.action_field >= 0 && values[static_cast<std::size_t>(shape.action_field)] == proto::kActionHome;
+  const bool homing = shape.action_field >= 0 && values[shape.action_field] == proto::kActionHome;
   if (outside == 0 && !shape.ranged_by_setting && !homing) return true;
-  return find_fault(shape, values.data()).reason == proto::Reason::kOk;
+  return find_fault(shape, values).reason == proto::Reason::kOk;
 }
 // find_fault() explained: `offsets[i]` is where value i starts in the text the diagnostic
 // refers to. Nothing when the values pass.
