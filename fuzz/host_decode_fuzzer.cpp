@@ -189,6 +189,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     const auto slow = g::parse_frame(input, mode, g::command_shapes());
     require(slow.ok(), [&] { return "one-pass reading accepts what parse_frame refuses: " + slow.error().message; },
             input);
+    require(g::find_fault(*shape, values.data()).reason == proto::Reason::kOk,
+            [&] { return std::string("one-pass reading accepts values find_fault refuses"); }, input);
     require(slow->shape == shape && slow->canonical && slow->values == values,
             [&] { return std::string("one-pass reading differs from parse_frame"); }, input);
   }

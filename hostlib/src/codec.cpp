@@ -116,11 +116,12 @@ uint32_t checksum(const Command& command, proto::ChecksumMode mode) {
 }
 
 Result<Decoded, Diagnostic> decode(std::string_view line, proto::ChecksumMode mode) {
-  // The common case in one pass; anything else (a refusal, blanks, leading zeros) is judged
-  // and explained step by step below.
+  // The common case in one pass; anything else (a refusal, blanks, leading zeros, a value the
+  // rules decide) is judged and explained step by step below.
   std::array<uint32_t, proto::kMaxValues> values{};
-  const g::Shape* shape = g::parse_canonical_frame(line, mode, g::command_shapes(), values);
-  if (shape != nullptr && g::values_valid(*shape, values.data())) return accepted(*shape, values.data(), true);
+  if (const g::Shape* shape = g::parse_canonical_frame(line, mode, g::command_shapes(), values)) {
+    return accepted(*shape, values.data(), true);
+  }
   auto frame = g::parse_frame(line, mode, g::command_shapes());
   if (!frame) return frame.error();
   // 15-16. Ranges and rules.

@@ -431,6 +431,7 @@ const Shape* parse_canonical_frame(std::string_view line, proto::ChecksumMode mo
   // 'E' and no digits.
   const char* p = line.data() + shape->head_size;
   uint32_t sum = 0;
+  uint32_t outside = 0;  // outside_own_ranges(), on the way
   for (uint32_t i = 0; i < shape->value_count; ++i) {
     uint32_t value = 0;
     const char* const first = p;
@@ -438,6 +439,7 @@ const Shape* parse_canonical_frame(std::string_view line, proto::ChecksumMode mo
     if (*p != '#' || !canonical_digits(first, p, 9)) return nullptr;
     values[i] = value;
     sum += value;
+    outside |= static_cast<uint32_t>(value - shape->min[i] > shape->span[i]);
     ++p;
   }
   uint32_t given = 0;
@@ -451,7 +453,7 @@ const Shape* parse_canonical_frame(std::string_view line, proto::ChecksumMode mo
   } else if (!canonical_digits(checksum_at, p, 3) || given != (sum & 0xFFu)) {
     return nullptr;
   }
-  return shape;
+  return passes_plainly(*shape, values.data(), outside) ? shape : nullptr;
 }
 
 namespace {

@@ -73,11 +73,11 @@ Diagnostic unknown_name(const ShapeTable& table, std::string_view name, std::siz
 // end in one LF, CRLF or CR, which is removed. A blank line is refused as bad_start.
 Result<Frame, Diagnostic> parse_frame(std::string_view line, proto::ChecksumMode mode, const ShapeTable& table);
 
-// Steps 1-14 in one pass for the common case: a canonical frame (nothing around it, no leading
-// zeros, values of at most 9 digits) whose every step passes. Returns its shape and fills
-// `values`; returns nullptr for anything else, which parse_frame() then judges and explains.
-// It never accepts a line that parse_frame() refuses or reads differently (the host_decode
-// fuzzer checks this).
+// Steps 1-16 in one pass for the common case: a canonical frame (nothing around it, no leading
+// zeros, values of at most 9 digits) whose values pass plainly (passes_plainly() below). Returns
+// its shape and fills `values`; returns nullptr for anything else, which parse_frame() and
+// find_fault() then judge and explain. It never accepts a line that those refuse or read
+// differently (the host_decode fuzzer checks this).
 const Shape* parse_canonical_frame(std::string_view line, proto::ChecksumMode mode, const ShapeTable& table,
                                    std::array<uint32_t, proto::kMaxValues>& values);
 
@@ -88,23 +88,31 @@ struct ValueFault {
   uint32_t index;  // of the value
 };
 ValueFault find_fault(const Shape& shape, const uint32_t* values);
-// Whether find_fault() finds nothing, the common case decided without a branch per value:
-// every value within its field's own range (a power of two where it must be) passes unless a
-// setting gives the range or the switch rule applies.
-// The values are read one by one (value_count of them): they were written so just before, and
-// reading several at once would wait for those writes to reach memory.
-inline bool values_valid(const Shape& shape, const uint32_t* values) {
-  uint32_t outside = 0;
-  for (uint32_t i = 0; i < shape.value_count; ++i) {
-    outside |= static_cast<uint32_t>(values[i] - shape.min[i] > shape.span[i]);
-  }
+// Whether values pass without find_fault()'s rules: every value within its field's own range
+// (`outside`, non-zero when one is not) and a power of two where it must be, no value ranged by a
+// setting, and no home (the switch rule). Decided without a branch per value.
+inline bool passes_plainly(const Shape& shape, const uint32_t* values, uint32_t outside) {
   for (uint32_t bits = shape.power_of_two; bits != 0; bits &= bits - 1) {
     const uint32_t v = values[__builtin_ctz(bits)];
     outside |= v & (v - 1);
   }
   const bool homing = shape.action_field >= 0 && values[shape.action_field] == proto::kActionHome;
-  if (outside == 0 && !shape.ranged_by_setting && !homing) return true;
-  return find_fault(shape, values).reason == proto::Reason::kOk;
+  return outside == 0 && !shape.ranged_by_setting && !homing;
+}
+// Non-zero when a value lies outside its field's own range. The values are read one by one
+// (value_count of them): they were written so just before, and reading several at once would
+// wait for those writes to reach memory.
+inline uint32_t outside_own_ranges(const Shape& shape, const uint32_t* values) {
+  uint32_t outside = 0;
+  for (uint32_t i = 0; i < shape.value_count; ++i) {
+    outside |= static_cast<uint32_t>(values[i] - shape.min[i] > shape.span[i]);
+  }
+  return outside;
+}
+// Whether find_fault() finds nothing, the common case decided by passes_plainly().
+inline bool values_valid(const Shape& shape, const uint32_t* values) {
+  return passes_plainly(shape, values, outside_own_ranges(shape, values)) ||
+         find_fault(shape, values).reason == proto::Reason::kOk;
 }
 // find_fault() explained: `offsets[i]` is where value i starts in the text the diagnostic
 // refers to. Nothing when the values pass.
