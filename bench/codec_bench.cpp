@@ -119,12 +119,11 @@ int main(int argc, char** argv) {
   // The two codecs take turns on each slice of 10 000 frames, round after round, and each keeps
   // its fastest time for every slice: whatever else the machine does in a moment slows both
   // alike, and a slow moment costs a codec that slice of one round, not its whole round.
-  std::string buffer;
-  buffer.reserve(128);
+  hmc::FrameText text;
   const auto ours_codec = [&](const hmc::Command& c) -> size_t {
-    if (!hmc::encode_into(c, buffer)) return 0;
-    const auto decoded = hmc::decode(buffer);
-    return decoded && decoded->command == c ? buffer.size() : 0;
+    if (!hmc::encode_into(c, text)) return 0;
+    const auto decoded = hmc::decode(text.view());
+    return decoded && decoded->command == c ? text.size : 0;
   };
   const auto plain_codec = [&](const hmc::Command& c) -> size_t {
     const std::string frame = Straightforward::encode(c);

@@ -53,39 +53,47 @@ constexpr std::array<uint32_t, sizeof...(I)> advice_table(std::index_sequence<I.
 }
 constexpr auto kAdvisedFields = advice_table(std::make_index_sequence<proto::kCommandCount>{});
 
-// The commands lint() may warn of: those with advice, and LIM (limits that switch themselves off).
-template <std::size_t... I>
-constexpr std::array<bool, sizeof...(I)> linted_table(std::index_sequence<I...>) {
-  return {(kAdvisedFields[I] != 0 || proto::kCommands[I].id == proto::CommandId::kLimits)...};
+// Whether value i lies outside its field's advice, where a stop or a home does not exempt it.
+bool outside_advice(const proto::CommandSpec& spec, const uint32_t* values, uint32_t i) {
+  const proto::FieldSpec& f = spec.fields[i];
+  if (values[i] >= f.advised_min && values[i] <= f.advised_max) return false;
+  const uint32_t action = spec.action_field >= 0 ? values[spec.action_field] : proto::kActionForward;
+  if (action == proto::kActionStop && (f.flags & proto::kUncheckedOnStop)) return false;
+  return !(values[i] == 0 && (f.flags & proto::kZeroAllowedOnHome) && action == proto::kActionHome);
 }
-constexpr auto kLinted = linted_table(std::make_index_sequence<proto::kCommandCount>{});
+
+// Limits that are not ordered switch soft limits off; only all zeros says so plainly.
+bool switches_limits_off(const SoftLimits& l) {
+  const bool all_zero = l.low_sign == 0 && l.low == 0 && l.high_sign == 0 && l.high == 0;
+  return !all_zero && l.low_position() >= l.high_position();
+}
+
+// Whether lint() has anything to say, asked before any message is made.
+bool has_lint(const proto::CommandSpec& spec, const uint32_t* values, const Command& command) {
+  for (uint32_t bits = kAdvisedFields[static_cast<std::size_t>(spec.id)]; bits != 0; bits &= bits - 1) {
+    if (outside_advice(spec, values, static_cast<uint32_t>(__builtin_ctz(bits)))) return true;
+  }
+  const auto* limits = std::get_if<SoftLimits>(&command);
+  return limits != nullptr && switches_limits_off(*limits);
+}
 
 // lint() of a command whose values are at hand.
 std::vector<Warning> lint_values(const proto::CommandSpec& spec, const uint32_t* values, const Command& command) {
   std::vector<Warning> out;
-  const bool has_action = spec.action_field >= 0;
-  const uint32_t action = has_action ? values[static_cast<std::size_t>(spec.action_field)] : 0;
   for (uint32_t bits = kAdvisedFields[static_cast<std::size_t>(spec.id)]; bits != 0; bits &= bits - 1) {
     const auto i = static_cast<uint32_t>(__builtin_ctz(bits));
+    if (!outside_advice(spec, values, i)) continue;
     const proto::FieldSpec& f = spec.fields[i];
-    if (values[i] >= f.advised_min && values[i] <= f.advised_max) continue;
-    if (has_action && action == proto::kActionStop && (f.flags & proto::kUncheckedOnStop)) continue;
-    if (values[i] == 0 && (f.flags & proto::kZeroAllowedOnHome) && has_action && action == proto::kActionHome) {
-      continue;
-    }
     out.push_back({f.name, std::string(f.name) + " " + std::to_string(values[i]) + " is outside the spec's advised " +
                                std::to_string(f.advised_min) + "-" + std::to_string(f.advised_max) +
                                (values[i] < f.advised_min ? " (the motor may stall or skip steps)"
                                                           : " (very slow)")});
   }
-  // Limits that are not ordered switch soft limits off; only all zeros says so plainly.
-  if (const auto* l = std::get_if<SoftLimits>(&command)) {
-    const bool all_zero = l->low_sign == 0 && l->low == 0 && l->high_sign == 0 && l->high == 0;
-    if (!all_zero && l->low_position() >= l->high_position()) {
-      out.push_back({"high", "low " + position_text(l->low_position()) + " is not below high " +
-                                 position_text(l->high_position()) +
-                                 ": this switches the soft limits off (LIM m 0 0 0 0 says so plainly)"});
-    }
+  const auto* l = std::get_if<SoftLimits>(&command);
+  if (l != nullptr && switches_limits_off(*l)) {
+    out.push_back({"high", "low " + position_text(l->low_position()) + " is not below high " +
+                               position_text(l->high_position()) +
+                               ": this switches the soft limits off (LIM m 0 0 0 0 says so plainly)"});
   }
   return out;
 }
@@ -98,9 +106,8 @@ Result<Decoded, Diagnostic> accepted(const g::Shape& shape, const uint32_t* valu
   const auto id = static_cast<proto::CommandId>(g::command_shapes().index_of(shape));
   set_command(decoded.command, id, values);
   decoded.canonical = canonical;
-  if (kLinted[static_cast<std::size_t>(id)]) {
-    decoded.warnings = lint_values(proto::command_spec(id), values, decoded.command);
-  }
+  const proto::CommandSpec& spec = proto::command_spec(id);
+  if (has_lint(spec, values, decoded.command)) decoded.warnings = lint_values(spec, values, decoded.command);
   return out;
 }
 
@@ -143,19 +150,26 @@ std::vector<Warning> lint(const Command& command) {
 }
 
 Result<std::string, Diagnostic> encode(const Command& command, proto::ChecksumMode mode) {
-  std::string out;
-  auto written = encode_into(command, out, mode);
+  FrameText text;
+  auto written = encode_into(command, text, mode);
   if (!written) return written.error();
-  return out;
+  return std::string(text.view());
 }
 
-Result<std::size_t, Diagnostic> encode_into(const Command& command, std::string& out, proto::ChecksumMode mode) {
+Result<std::size_t, Diagnostic> encode_into(const Command& command, FrameText& out, proto::ChecksumMode mode) {
   const g::Shape& shape = shape_of(command);
   const CommandValues v = command_values(command);
-  if (!g::values_valid(shape, v.values.data())) return refusal_of(shape, v.values.data());
-  out.clear();
-  g::append_frame(out, shape, v.values.data(), mode);
-  return out.size();
+  // Written first and checked on the way: a refused command leaves bytes but no frame.
+  char* const first = out.bytes.data();
+  uint32_t outside = 0;
+  char* const end = g::write_frame_bytes(first, shape, v.values.data(), mode, outside);
+  if (!g::passes_plainly(shape, v.values.data(), outside) &&
+      g::find_fault(shape, v.values.data()).reason != Reason::kOk) {
+    out.size = 0;
+    return refusal_of(shape, v.values.data());
+  }
+  out.size = static_cast<std::size_t>(end - first);
+  return out.size;
 }
 
 Result<Command, Diagnostic> parse_input(std::string_view text, proto::ChecksumMode mode) {

@@ -94,10 +94,6 @@ void set_alternative(Command& out, std::size_t id, const uint32_t* values, std::
 
 }  // namespace
 
-proto::CommandId command_id(const Command& command) {
-  return static_cast<proto::CommandId>(command.index());
-}
-
 const proto::CommandSpec& command_spec(const Command& command) {
   return proto::command_spec(command_id(command));
 }

@@ -77,10 +77,6 @@ constexpr bool three_letter_names(const std::array<Shape, N>& shapes) {
 static_assert(three_letter_names(kCommandShapes) && three_letter_names(kBoardFrameShapes),
               "names are three letters and heads 8-12 bytes: find() and parse_canonical_frame() rely on it");
 
-constexpr ShapeTable kCommandTable{kCommandShapes.data(), kCommandShapes.size(), "command", "commands"};
-constexpr ShapeTable kBoardFrameTable{kBoardFrameShapes.data(), kBoardFrameShapes.size(), "board frame",
-                                      "board frames"};
-
 struct Token {
   std::string_view text;
   std::size_t offset = 0;  // in the line
@@ -135,6 +131,10 @@ std::string sum_explanation(const uint32_t* values, uint32_t count) {
 
 }  // namespace
 
+constexpr ShapeTable kCommandTable{kCommandShapes.data(), kCommandShapes.size(), "command", "commands"};
+constexpr ShapeTable kBoardFrameTable{kBoardFrameShapes.data(), kBoardFrameShapes.size(), "board frame",
+                                      "board frames"};
+
 bool is_blank_byte(char c) { return c == ' ' || c == '\t'; }
 bool is_frame_byte(char c) { return c >= '!' && c <= '~'; }
 
@@ -188,9 +188,6 @@ std::string ShapeTable::names() const {
   }
   return out;
 }
-
-const ShapeTable& command_shapes() { return kCommandTable; }
-const ShapeTable& board_frame_shapes() { return kBoardFrameTable; }
 
 Diagnostic refuse(Reason reason, int token, std::size_t offset, std::string field, std::string message,
                   uint32_t expected, uint32_t found) {
@@ -535,10 +532,9 @@ std::array<std::size_t, proto::kMaxValues> canonical_offsets(const Shape& shape,
 
 namespace {
 
-// Frames are written into a buffer on the stack, then appended to a string in one go. A
-// frame is at most kLineMax bytes. The writers take and return the write position (a local
-// pointer, so the compiler need not fear that the bytes written alias it).
-constexpr std::size_t kFrameBuffer = proto::kLineMax + 32;
+// Frames are written into FrameText::kRoom bytes: a frame is at most kLineMax of them, and the
+// writers store whole words past what they keep. They take and return the write position (a
+// local pointer, so the compiler need not fear that the bytes written alias it).
 
 // Numbers are written three digits at a time from two tables of 1 000 four-byte entries, each
 // copied whole: kGroups[n] holds n without leading zeros and a '#' ("7#", "42#", "255#"),
@@ -590,24 +586,27 @@ inline char* write_crc_field(char* w, uint32_t crc) {
 
 // The head of the frame through the '#' before its first value (or checksum), then the values;
 // `sum` gets the seed's checksum on the way.
-char* write_head(char* w, const Shape& shape, const uint32_t* values, uint32_t& sum) {
+char* write_head(char* w, const Shape& shape, const uint32_t* values, uint32_t& sum, uint32_t& outside) {
   std::memcpy(w, shape.head.data(), shape.head.size());
   w += shape.head_size;
   uint32_t total = 0;
+  uint32_t misses = 0;
   for (uint32_t i = 0; i < shape.value_count; ++i) {
     w = write_field(w, values[i]);
     total += values[i];
+    misses |= static_cast<uint32_t>(values[i] - shape.min[i] > shape.span[i]);
   }
   sum = total & 0xFFu;
+  outside = misses;
   return w;
 }
 
 }  // namespace
 
 uint32_t checksum_of(const Shape& shape, const uint32_t* values, proto::ChecksumMode mode) {
-  char bytes[kFrameBuffer];
-  uint32_t sum = 0;
-  const char* end = write_head(bytes, shape, values, sum);
+  char bytes[FrameText::kRoom];
+  uint32_t sum = 0, outside = 0;
+  const char* end = write_head(bytes, shape, values, sum, outside);
   return mode == proto::ChecksumMode::kCrc16 ? crc_of(std::string_view(bytes, static_cast<std::size_t>(end - bytes)))
                                               : sum;
 }
@@ -617,22 +616,22 @@ std::string crc_text(uint32_t crc) {
   return std::string(field, static_cast<std::size_t>(write_crc_field(field, crc) - field - 1));
 }
 
-void append_frame(std::string& out, const Shape& shape, const uint32_t* values, proto::ChecksumMode mode) {
-  char bytes[kFrameBuffer];
+char* write_frame_bytes(char* w, const Shape& shape, const uint32_t* values, proto::ChecksumMode mode,
+                        uint32_t& outside) {
+  char* const first = w;
   uint32_t sum = 0;
-  char* w = write_head(bytes, shape, values, sum);
+  w = write_head(w, shape, values, sum, outside);
   w = mode == proto::ChecksumMode::kCrc16
-          ? write_crc_field(w, crc_of(std::string_view(bytes, static_cast<std::size_t>(w - bytes))))
+          ? write_crc_field(w, crc_of(std::string_view(first, static_cast<std::size_t>(w - first))))
           : write_field(w, sum);
   std::memcpy(w, kEnd.data(), kEnd.size());
-  out.append(bytes, static_cast<std::size_t>(w + kEnd.size() - bytes));
+  return w + kEnd.size();
 }
 
 std::string write_frame(const Shape& shape, const uint32_t* values, proto::ChecksumMode mode) {
-  std::string out;
-  out.reserve(64);
-  append_frame(out, shape, values, mode);
-  return out;
+  char bytes[FrameText::kRoom];
+  uint32_t outside = 0;
+  return std::string(bytes, write_frame_bytes(bytes, shape, values, mode, outside));
 }
 
 }  // namespace hmc::grammar

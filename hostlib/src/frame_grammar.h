@@ -45,8 +45,10 @@ struct ShapeTable {
   std::size_t index_of(const Shape& shape) const { return static_cast<std::size_t>(&shape - shapes); }
   std::string names() const;  // "STM, SVM and LED"
 };
-const ShapeTable& command_shapes();      // proto::kCommands, in CommandId order
-const ShapeTable& board_frame_shapes();  // proto::kBoardFrames, in BoardFrameId order
+extern const ShapeTable kCommandTable;     // proto::kCommands, in CommandId order
+extern const ShapeTable kBoardFrameTable;  // proto::kBoardFrames, in BoardFrameId order
+inline const ShapeTable& command_shapes() { return kCommandTable; }
+inline const ShapeTable& board_frame_shapes() { return kBoardFrameTable; }
 
 // A frame that passed steps 1-14 of the order of checks.
 struct Frame {
@@ -127,8 +129,10 @@ uint32_t checksum_of(const Shape& shape, const uint32_t* values, proto::Checksum
 std::string crc_text(uint32_t crc);
 // The canonical frame of these values, checksum in `mode`, no line end. Does not check ranges.
 std::string write_frame(const Shape& shape, const uint32_t* values, proto::ChecksumMode mode);
-// The same, appended to `out` (no allocation once `out` has the capacity).
-void append_frame(std::string& out, const Shape& shape, const uint32_t* values, proto::ChecksumMode mode);
+// The same, written at `w`, which has FrameText::kRoom bytes; returns where the frame ends.
+// `outside` gets outside_own_ranges(), found on the way.
+char* write_frame_bytes(char* w, const Shape& shape, const uint32_t* values, proto::ChecksumMode mode,
+                        uint32_t& outside);
 
 // The seed's checksum: the values' sum mod 256.
 uint32_t sum_of(const uint32_t* values, uint32_t count);

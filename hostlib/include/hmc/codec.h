@@ -10,6 +10,7 @@
 // v2's `CRC` command): the seed's sum, the default, or CRC-16 (docs/protocol.md "CRC-16 mode").
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -64,9 +65,18 @@ std::vector<Warning> lint(const Command& command);
 // The canonical frame for a command, without a line terminator; refuses an invalid command.
 Result<std::string, Diagnostic> encode(const Command& command, proto::ChecksumMode mode = proto::ChecksumMode::kSum);
 
-// encode() into `out` (cleared first), for loops that frame many commands: no allocation once
-// `out` has room for a frame. Returns the frame's length.
-Result<std::size_t, Diagnostic> encode_into(const Command& command, std::string& out,
+// A frame written in place by encode_into(): room for kLineMax bytes and the whole words the
+// writer stores past the frame's end.
+struct FrameText {
+  static constexpr std::size_t kRoom = proto::kLineMax + 32;
+  std::array<char, kRoom> bytes;
+  std::size_t size = 0;
+  std::string_view view() const { return {bytes.data(), size}; }
+};
+
+// encode() into `out`, for loops that frame many commands: nothing allocated, nothing copied.
+// Returns the frame's length; `out` is left as it was when the command is refused.
+Result<std::size_t, Diagnostic> encode_into(const Command& command, FrameText& out,
                                             proto::ChecksumMode mode = proto::ChecksumMode::kSum);
 
 // A command as a person types it: a frame (`STX#...#ETX`) or command-set notation

@@ -105,7 +105,7 @@ struct CommandValues {
   uint32_t count = 0;
 };
 
-proto::CommandId command_id(const Command& command);
+inline proto::CommandId command_id(const Command& command) { return static_cast<proto::CommandId>(command.index()); }
 const proto::CommandSpec& command_spec(const Command& command);
 CommandValues command_values(const Command& command);
 // Builds a command from its values in wire order; `values` holds spec.value_count entries
