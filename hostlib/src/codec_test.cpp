@@ -331,3 +331,22 @@ TEST_CASE("CRC-16 checksum fields are five digits for CRCs of every width") {
   }
   CHECK(std::count(seen.begin(), seen.end(), 0) == 0);
 }
+
+TEST_CASE("encode_into writes the frame encode() returns, and no frame for a refused command") {
+  hmc::FrameText text;
+  const hmc::StepperMove move{1, 1, 128, 1000, 500};
+  auto written = hmc::encode_into(move, text);
+  REQUIRE(written.ok());
+  CHECK(*written == text.size);
+  CHECK(text.view() == *hmc::encode(move));
+  auto refused = hmc::encode_into(hmc::StepperMove{1, 1, 3, 100, 500}, text);
+  REQUIRE_FALSE(refused.ok());
+  CHECK(refused.error().field == "microstep");
+  CHECK(text.size == 0);
+  // Home, stop and setting values are judged by the rules, not the fields' own ranges alone.
+  CHECK(hmc::encode_into(hmc::StepperMove{1, 3, 0, 0, 0}, text).ok());
+  CHECK(text.view() == "STX#6#STM#1#3#0#0#0#4#ETX");
+  CHECK(hmc::encode_into(hmc::StepperMove{3, 0, 0, 0, 0}, text).ok());
+  CHECK_FALSE(hmc::encode_into(hmc::StepperMove{3, 3, 0, 0, 0}, text).ok());
+  CHECK_FALSE(hmc::encode_into(hmc::SetSetting{1, hmc::proto::kSettingCurrent, 100000}, text).ok());
+}

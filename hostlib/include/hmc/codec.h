@@ -75,7 +75,7 @@ struct FrameText {
 };
 
 // encode() into `out`, for loops that frame many commands: nothing allocated, nothing copied.
-// Returns the frame's length; `out` is left as it was when the command is refused.
+// Returns the frame's length; a refused command leaves no frame in `out` (size 0).
 Result<std::size_t, Diagnostic> encode_into(const Command& command, FrameText& out,
                                             proto::ChecksumMode mode = proto::ChecksumMode::kSum);
 
