@@ -436,7 +436,7 @@ const Shape* parse_canonical_frame(std::string_view line, proto::ChecksumMode mo
     if (*p != '#' || !canonical_digits(first, p, 9)) return nullptr;
     values[i] = value;
     sum += value;
-    outside |= static_cast<uint32_t>(value - shape->min[i] > shape->span[i]);
+    outside |= outside_own_range(*shape, i, value);
     ++p;
   }
   uint32_t given = 0;
@@ -594,7 +594,7 @@ char* write_head(char* w, const Shape& shape, const uint32_t* values, uint32_t& 
   for (uint32_t i = 0; i < shape.value_count; ++i) {
     w = write_field(w, values[i]);
     total += values[i];
-    misses |= static_cast<uint32_t>(values[i] - shape.min[i] > shape.span[i]);
+    misses |= outside_own_range(shape, i, values[i]);
   }
   sum = total & 0xFFu;
   outside = misses;

@@ -101,14 +101,16 @@ inline bool passes_plainly(const Shape& shape, const uint32_t* values, uint32_t 
   const bool homing = shape.action_field >= 0 && values[shape.action_field] == proto::kActionHome;
   return outside == 0 && !shape.ranged_by_setting && !homing;
 }
+// 1 when `value` lies outside the own range of field i, else 0: to be or-ed without a branch.
+inline uint32_t outside_own_range(const Shape& shape, uint32_t i, uint32_t value) {
+  return static_cast<uint32_t>(value - shape.min[i] > shape.span[i]);
+}
 // Non-zero when a value lies outside its field's own range. The values are read one by one
 // (value_count of them): they were written so just before, and reading several at once would
 // wait for those writes to reach memory.
 inline uint32_t outside_own_ranges(const Shape& shape, const uint32_t* values) {
   uint32_t outside = 0;
-  for (uint32_t i = 0; i < shape.value_count; ++i) {
-    outside |= static_cast<uint32_t>(values[i] - shape.min[i] > shape.span[i]);
-  }
+  for (uint32_t i = 0; i < shape.value_count; ++i) outside |= outside_own_range(shape, i, values[i]);
   return outside;
 }
 // Whether find_fault() finds nothing, the common case decided by passes_plainly().
