@@ -165,6 +165,7 @@ void add_stream(CLI::App& app, const GlobalOptions& g, int& exit_code) {
       line_numbers.push_back(number);
     }
     run_on_board(g, exit_code, [&](Session& s) {
+      if (SessionResult<Done> watched = watch_link(s, g); !watched) return report_error(g, watched.error());
       const Clock::time_point start = Clock::now();
       SessionResult<Session::StreamReport> report = s.stream(commands, !o->one_at_a_time);
       const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
@@ -273,6 +274,9 @@ void add_move(CLI::App& app, const GlobalOptions& g, int& exit_code) {
         SessionResult<BoardFrame> set = s.execute(SetSetting{o->motor, proto::kSettingAccel, *o->accel});
         if (!set) return report_error(g, set.error());
       }
+      if (o->wait) {
+        if (SessionResult<Done> watched = watch_link(s, g); !watched) return report_error(g, watched.error());
+      }
       SessionResult<BoardFrame> sent = s.execute(*move);
       if (!sent) return report_error(g, sent.error());
       if (o->wait) return wait_and_report(g, s, {o->motor}, Motion::kMove);
@@ -313,6 +317,9 @@ void add_home(CLI::App& app, const GlobalOptions& g, int& exit_code) {
       Result<std::vector<uint32_t>> motors = motors_of(o->motors, with_switches);
       if (!motors) return usage_error(g, motors.error().message);
       if (o->no_wait && motors->size() > 1) return usage_error(g, "--no-wait homes one motor: homing needs the others at rest");
+      if (!o->no_wait) {
+        if (SessionResult<Done> watched = watch_link(s, g); !watched) return report_error(g, watched.error());
+      }
       int code = kExitOk;
       // Homing needs every motor at rest (seed rule [2]): one after another.
       for (const uint32_t m : *motors) {
@@ -439,7 +446,15 @@ void print_status(const Session& s) {
     std::cout << "The seed firmware reports nothing: the board's state is unknown to a new session.\n";
     return;
   }
-  std::cout << "emergency switch: " << (model.board.emergency ? "PRESSED" : "released") << "\n\n";
+  std::cout << "emergency switch: " << (model.board.emergency ? "PRESSED" : "released") << '\n';
+  if (const std::optional<WatchdogStatus>& w = model.watchdog) {
+    std::cout << "link watchdog: " << (w->timeout_ms == 0 ? std::string("off") : std::to_string(w->timeout_ms) + " ms")
+              << (w->fired ? "; it FIRED since it was last armed: the host went silent and the board braked every "
+                             "motor"
+                           : "")
+              << '\n';
+  }
+  std::cout << '\n';
   std::cout << std::left << std::setw(7) << "motor" << std::setw(10) << "state" << std::setw(14) << "position"
             << std::setw(14) << "target" << std::setw(11) << "microstep" << std::setw(9) << "rate" << std::setw(7)
             << "homed" << "switches\n";
@@ -507,6 +522,10 @@ void add_monitor(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     std::unique_ptr<Session> s = connect(g, exit_code, show);
     if (!s) return;
     if (s->firmware() == Firmware::kSeed && !g.json) std::cerr << "note: the seed firmware sends nothing\n";
+    if (SessionResult<Done> watched = watch_link(*s, g); !watched) {
+      exit_code = report_error(g, watched.error());
+      return;
+    }
     if (!g.json) std::cerr << "listening" << (*seconds > 0 ? "" : " until Ctrl-C") << "...\n";
     *started = Clock::now();
     *showing = true;

@@ -21,6 +21,7 @@ struct GlobalOptions {
   bool json = false;       // --json
   int verbose = 0;         // -v: every line sent and received, on standard error
   std::string firmware = "auto";  // --firmware auto|v2|seed
+  int watchdog_ms = 500;   // --watchdog: the link watchdog long-lived commands arm; 0 none
 };
 
 // Adds the global options to the top-level app (they may also follow a subcommand).
@@ -33,7 +34,13 @@ using LineHandler = std::function<void(std::string_view line, const Result<Board
 // with `exit_code` set.
 std::unique_ptr<Session> connect(const GlobalOptions& options, int& exit_code, LineHandler on_line = nullptr);
 
-// Raised by SIGINT; a session's waits poll it.
+// For commands that keep the board busy (run, stream, move --wait, home, monitor): arms the
+// board's link watchdog (--watchdog), so the motors brake if this process dies without a word;
+// the session keeps the link alive and disarms it when it ends. A board without one (seed
+// firmware, protocol 2) gets a note on standard error and the command goes on.
+SessionResult<Done> watch_link(Session& session, const GlobalOptions& options);
+
+// Raised by SIGINT, SIGTERM and SIGHUP; a session's waits poll it.
 bool interrupt_requested();
 
 // Prints a session error (as {"error": {...}} with --json) and returns its exit code.
