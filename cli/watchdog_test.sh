@@ -24,14 +24,14 @@ ticks_per_ms=48000  # the simulated board's clock, 48 MHz
 json_of() { python3 -c 'import json, sys; d = json.loads(sys.argv[1]); print(eval(sys.argv[2]))' "$1" "$2"; }
 
 # watchdog_end: from the trace, "GAP_MS EVD_COUNT": the time from the last line the board
-# received to the last EVD how 6 (watchdog), and how many motors it braked.
+# received (keep-alives included) to the last EVD how 6 (watchdog), and how many motors it braked.
 watchdog_end() {
   python3 - "$work/trace.jsonl" "$ticks_per_ms" <<'EOF'
 import json, sys
 last_rx, ends = None, []
 for line in open(sys.argv[1]):
     e = json.loads(line)
-    if e.get("ev") == "rx":
+    if e.get("ev") in ("rx", "rx_blank"):  # a frame, or a keep-alive
         last_rx = e["t"]
     elif e.get("ev") == "tx" and e["line"].startswith("STX#5#EVD#") and e["line"].split("#")[4] == "6":
         ends.append(e["t"])
@@ -66,8 +66,7 @@ EOF
 "$hmc" --port "$port" --watchdog "$watchdog_ms" run long.json >run.out 2>&1 &
 run_pid=$!
 sleep 1.2
-kill -9 "$run_pid"
-wait "$run_pid" 2>/dev/null
+{ kill -9 "$run_pid" && wait "$run_pid"; } 2>/dev/null
 sleep 0.8  # the watchdog's 300 ms, then the stop (constant rate: at once)
 read -r gap braked <<<"$(watchdog_end)"
 [[ $gap != none && $gap -le $((watchdog_ms + 20)) && $gap -ge $watchdog_ms ]] ||
@@ -110,7 +109,7 @@ done
 "$hmc" --port "tcp://127.0.0.1:$relay_port" --watchdog "$watchdog_ms" move 3 --run --delay 500 --wait >cut.out 2>&1 &
 cut_pid=$!
 sleep 1.0
-kill -9 "$relay_pid"
+{ kill -9 "$relay_pid" && wait "$relay_pid"; } 2>/dev/null
 wait "$cut_pid"
 cut_exit=$?
 sleep 0.8
