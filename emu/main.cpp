@@ -82,6 +82,7 @@ class Emulator {
     chip_options.watchdog_resets = options_.watchdog_resets;
     const uint64_t carried_ps = machine_.chip ? machine_.chip->now_ps() : 0;
     machine_.cpu.reset();
+    booted_ = false;
     machine_.chip = std::make_unique<Chip>(chip_options);
     machine_.chip->pm().set_reset_cause(reset_cause);
     time_offset_ps_ += carried_ps;
@@ -114,6 +115,11 @@ class Emulator {
       if (const std::string out = uart.take_output(); !out.empty()) {
         link_.write(out);
         quiet_since = now_ps();
+        if (out.find('\n') != std::string::npos) booted_ = true;
+      }
+      if (booted_ && !held_.empty()) {
+        uart.host_send(held_);
+        held_.clear();
       }
       if (!chip.violation_message().empty()) {
         const uint32_t pc = machine_.cpu->pc();
@@ -143,7 +149,7 @@ class Emulator {
       }
       // Standard input ended: finish once every byte is in and the answers have been quiet
       // for 200 ms of virtual time.
-      if (input_ended && !uart.receiving() && !uart.transmitting() &&
+      if (input_ended && held_.empty() && !uart.receiving() && !uart.transmitting() &&
           now_ps() - quiet_since > 200 * kPsPerMs) {
         return kExitOk;
       }
@@ -158,7 +164,10 @@ class Emulator {
       }
       const std::string in = link_.service(poll_);
       if (!in.empty()) {
-        uart.host_send(in);
+        // Until the board's first line (its boot event) the host's bytes wait: on the board
+        // they would reach a receiver not yet enabled and be lost (docs/emu.md).
+        if (booted_) uart.host_send(in);
+        else held_ += in;
         quiet_since = now_ps();
       }
       if (link_.detached() && link_.ends_at_detach() && !input_ended) {
@@ -178,6 +187,8 @@ class Emulator {
   Machine machine_;
   uint64_t time_offset_ps_ = 0;
   sim::PollSet poll_;
+  bool booted_ = false;  // the board has sent its first line since power-on
+  std::string held_;     // host bytes waiting for it
 };
 
 int run(const Options& options) {
