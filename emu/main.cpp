@@ -231,7 +231,8 @@ int run(const Options& options) {
     const Machine& m = emulator.machine();
     const double virtual_s = static_cast<double>(emulator.now_ps()) / 1e12;
     std::fprintf(stderr, "hmc-emu: %.3f s virtual in %.3f s wall (%.2fx real time), %" PRIu64
-                         " cycles\n", virtual_s, wall, virtual_s / wall, m.chip->cycles());
+                         " cycles in %" PRIu64 " chunks\n", virtual_s, wall, virtual_s / wall,
+                 m.chip->cycles(), m.cpu->chunks());
     for (const auto& [exception, figures] : m.cpu->handler_figures()) {
       std::fprintf(stderr, "hmc-emu: exception %u: %" PRIu64 " entries, %.1f cycles each\n",
                    exception, figures.count,

@@ -47,6 +47,7 @@ Chip::Chip(const ChipOptions& options) : options_(options) {
   tcc0_ = std::make_unique<Tcc>(*this);
   dmac_ = std::make_unique<Dmac>(*this);
   board_ = std::make_unique<Board>(*this);
+  hz_ = gclk_->generator_hz(0);
 
   size_t pages = 0;
   for (const Region& r : kRegions) pages += r.size / 0x400;
@@ -173,17 +174,19 @@ uint64_t Chip::generator_hz(unsigned generator) const { return gclk_->generator_
 uint64_t Chip::channel_hz(unsigned id) const { return gclk_->channel_hz(id); }
 
 // The CPU runs on generator 0 divided by PM CPUSEL (16.8.3: divide by 2^CPUDIV).
-uint64_t Chip::cpu_hz() const {
-  return gclk_->generator_hz(0) >> (pm_->read(0x08, 1) & 7);
+void Chip::update_cpu_clock() {
+  const uint64_t hz = gclk_->generator_hz(0) >> (pm_->read(0x08, 1) & 7);
+  if (hz == hz_) return;
+  base_ps_ = now_ps();
+  base_cycles_ = cycles_;
+  hz_ = hz;
 }
 
-void Chip::charge_cycles(uint64_t cycles) {
-  cycles_ += cycles;
-  const uint64_t hz = cpu_hz();
-  if (hz == 0) return;
-  const Wide ps = static_cast<Wide>(cycles) * kPsPerSecond + ps_remainder_;
-  now_ps_ += static_cast<uint64_t>(ps / hz);
-  ps_remainder_ = static_cast<uint64_t>(ps % hz);
+uint64_t Chip::cycles_at(uint64_t ps) const {
+  if (hz_ == 0 || ps == UINT64_MAX) return UINT64_MAX;
+  if (ps <= base_ps_) return base_cycles_;
+  const Wide cycles = (static_cast<Wide>(ps - base_ps_) * hz_ + kPsPerSecond - 1) / kPsPerSecond;
+  return cycles > UINT64_MAX - base_cycles_ ? UINT64_MAX : base_cycles_ + static_cast<uint64_t>(cycles);
 }
 
 void Chip::charge_stall(uint64_t clock_cycles, uint64_t hz) {
@@ -193,7 +196,9 @@ void Chip::charge_stall(uint64_t clock_cycles, uint64_t hz) {
 }
 
 void Chip::advance() {
-  for (Timed* t : timed_) t->advance(now_ps_);
+  update_cpu_clock();
+  const uint64_t now = now_ps();
+  for (Timed* t : timed_) t->advance(now);
   uint64_t next = UINT64_MAX;
   for (const Timed* t : timed_) {
     const uint64_t e = t->next_event_ps();

@@ -14,6 +14,12 @@
 
 namespace hmc::emu {
 
+__extension__ typedef unsigned __int128 Wide;  // GCC/Clang: products of two 64-bit values
+// a·b/c, rounded down, without overflow of the product.
+inline uint64_t mul_div(uint64_t a, uint64_t b, uint64_t c) {
+  return static_cast<uint64_t>(static_cast<Wide>(a) * b / c);
+}
+
 class Pm;
 class Sysctrl;
 class Gclk;
@@ -63,12 +69,18 @@ class Chip {
   Memory& memory() { return *memory_; }
 
   // ---- Time. CPU cycles are charged by the CPU; everything else runs on picoseconds.
-  uint64_t now_ps() const { return now_ps_; }
+  // Virtual time is kept as CPU cycles since a base point; a change of the CPU clock moves the
+  // base, so charging cycles costs an addition and reading the time one division.
+  uint64_t now_ps() const {
+    return hz_ == 0 ? base_ps_ : base_ps_ + mul_div(cycles_ - base_cycles_, kPsPerSecond, hz_);
+  }
   uint64_t cycles() const { return cycles_; }
-  void charge_cycles(uint64_t cycles);
+  void charge_cycles(uint64_t cycles) { cycles_ += cycles; }
+  // The cycle count at which virtual time reaches `ps` (at the current CPU clock).
+  uint64_t cycles_at(uint64_t ps) const;
   // A bus stall measured in cycles of `hz` (a synchronisation delay), charged to the CPU.
   void charge_stall(uint64_t clock_cycles, uint64_t hz);
-  uint64_t cpu_hz() const;
+  uint64_t cpu_hz() const { return hz_; }
   // The frequency of the generic clock channel `id` (GCLK CLKCTRL.ID), 0 when disabled.
   uint64_t channel_hz(unsigned id) const;
   uint64_t generator_hz(unsigned generator) const;
@@ -132,9 +144,11 @@ class Chip {
 
   ChipOptions options_;
   Memory* memory_ = nullptr;
-  uint64_t now_ps_ = 0;
-  uint64_t ps_remainder_ = 0;
+  uint64_t base_ps_ = 0;
+  uint64_t base_cycles_ = 0;
+  uint64_t hz_ = 0;
   uint64_t cycles_ = 0;
+  void update_cpu_clock();
   uint64_t next_event_ps_ = 0;
   bool reschedule_ = true;
   bool irq_dirty_ = true;
@@ -165,19 +179,21 @@ class Chip {
   friend class Scs;
 };
 
-// Little-endian register storage a block keeps its plain registers in.
+// Little-endian register storage a block keeps its plain registers in (at most 128 bytes: no
+// allocation, as blocks build one per access to assemble their registers).
 class RegisterBytes {
  public:
-  explicit RegisterBytes(size_t size) : bytes_(size, 0) {}
+  static constexpr size_t kMax = 0x80;
+  explicit RegisterBytes(size_t size) : size_(size < kMax ? size : kMax) {}
   uint32_t get(uint32_t offset, unsigned size) const {
     uint32_t value = 0;
-    for (unsigned i = 0; i < size && offset + i < bytes_.size(); ++i) {
+    for (unsigned i = 0; i < size && offset + i < size_; ++i) {
       value |= uint32_t{bytes_[offset + i]} << (8 * i);
     }
     return value;
   }
   void set(uint32_t offset, uint32_t value, unsigned size) {
-    for (unsigned i = 0; i < size && offset + i < bytes_.size(); ++i) {
+    for (unsigned i = 0; i < size && offset + i < size_; ++i) {
       bytes_[offset + i] = static_cast<uint8_t>(value >> (8 * i));
     }
   }
@@ -187,14 +203,9 @@ class RegisterBytes {
   }
 
  private:
-  std::vector<uint8_t> bytes_;
+  size_t size_;
+  std::array<uint8_t, kMax> bytes_{};
 };
-
-__extension__ typedef unsigned __int128 Wide;  // GCC/Clang: products of two 64-bit values
-// a·b/c, rounded down, without overflow of the product.
-inline uint64_t mul_div(uint64_t a, uint64_t b, uint64_t c) {
-  return static_cast<uint64_t>(static_cast<Wide>(a) * b / c);
-}
 
 // Does an access [offset, offset+size) touch the register [reg, reg+reg_size)?
 inline bool touches(uint32_t offset, unsigned size, uint32_t reg, unsigned reg_size) {

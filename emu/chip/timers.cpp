@@ -149,8 +149,8 @@ void Tc::write(uint32_t offset, uint32_t value, unsigned size) {
       ctrla_ = v;
     }
   }
-  if (touches(offset, size, 0x02, 2)) {
-    const uint16_t v = static_cast<uint16_t>(view.get(0x02, 2));
+  if (offset == 0x02 && size == 2) {  // READREQ alone: no timing or interrupt changes
+    const uint16_t v = static_cast<uint16_t>(value);
     continuous_read_ = (v & (1u << 14)) != 0;
     if ((v & (1u << 15)) != 0 && (v & 0x1F) == 0x10) {
       // 30.6.6: the read request synchronises COUNT into the APB domain; the bus waits
@@ -159,6 +159,7 @@ void Tc::write(uint32_t offset, uint32_t value, unsigned size) {
       chip_.charge_cycles(3);
       synced_count_ = static_cast<uint32_t>(position(chip_.now_ps()) % modulus());
     }
+    return;
   }
   RegisterBytes w(0x20);
   w.set(offset, value, size);

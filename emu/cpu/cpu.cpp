@@ -125,6 +125,15 @@ bool Cpu::init(std::string& error) {
   }
   chip_.set_memory(this);
 
+  // One fixed exit address (never reached: it is not in the chip's memory map), set once:
+  // uc_emu_start's own `until` would invalidate translations at every start.
+  uint64_t exits[] = {0xFFFFFFFEu};
+  if (err == UC_ERR_OK) err = uc_ctl_exits_enable(uc_);
+  if (err == UC_ERR_OK) err = uc_ctl_set_exits(uc_, exits, 1);
+  if (err != UC_ERR_OK) {
+    error = std::string("cannot configure the CPU engine: ") + uc_strerror(err);
+    return false;
+  }
   uc_hook hook;
   uc_hook_add(uc_, &hook, UC_HOOK_BLOCK, reinterpret_cast<void*>(on_block), this, 1, 0);
   hooks_.push_back(hook);
@@ -165,15 +174,18 @@ bool Cpu::reset(uint32_t vector_table, std::string& error) {
   return true;
 }
 
+// Each translated block is costed once; flash blocks by their start address in a flat table.
 uint32_t Cpu::block_cost(uint64_t address, uint32_t size) {
-  const auto it = block_costs_.find(address << 16 | size);
-  if (it != block_costs_.end()) return it->second;
+  BlockCost* cached = address < kFlashSize ? &flash_costs_[address / 2] : nullptr;
+  if (cached != nullptr && cached->size == size) return cached->cycles;
   std::vector<uint8_t> code(size);
   uint32_t cost = size / 2;
   if (uc_mem_read(uc_, address, code.data(), size) == UC_ERR_OK) {
     cost = thumb_block_cycles(code.data(), size);
   }
-  block_costs_.emplace(address << 16 | size, cost);
+  if (cached != nullptr && size <= UINT16_MAX && cost <= UINT16_MAX) {
+    *cached = BlockCost{static_cast<uint16_t>(size), static_cast<uint16_t>(cost)};
+  }
   return cost;
 }
 
@@ -182,7 +194,13 @@ void Cpu::on_block(uc_engine*, uint64_t address, uint32_t size, void* user) {
   Chip& chip = cpu.chip_;
   cpu.block_address_ = static_cast<uint32_t>(address);
   chip.charge_cycles(cpu.block_cost(address, size));
-  if (chip.stopped() || chip.now_ps() >= cpu.deadline_ps_ || chip.reschedule_requested()) {
+  if (chip.reschedule_requested() && !chip.stopped()) {
+    // A register write moved a peripheral's next event or the CPU clock: catch up and take the
+    // new deadline without leaving the engine (no CPU state changes here).
+    chip.advance();
+    cpu.set_deadline();
+  }
+  if (chip.stopped() || chip.cycles() >= cpu.deadline_cycles_) {
     uc_emu_stop(cpu.uc_);
     return;
   }
@@ -317,6 +335,11 @@ void Cpu::return_from_exception() {
   set_reg(UC_ARM_REG_PC, frame[6] | 1u);  // bit 0 keeps the engine in Thumb state
 }
 
+void Cpu::set_deadline() {
+  const uint64_t ps = chip_.next_event_ps() < until_ps_ ? chip_.next_event_ps() : until_ps_;
+  deadline_cycles_ = chip_.cycles_at(ps);
+}
+
 void Cpu::run_until(uint64_t until_ps) {
   while (!chip_.stopped() && chip_.now_ps() < until_ps) {
     chip_.advance();
@@ -326,8 +349,10 @@ void Cpu::run_until(uint64_t until_ps) {
       enter_exception(e);
       if (chip_.stopped()) break;
     }
-    deadline_ps_ = chip_.next_event_ps() < until_ps ? chip_.next_event_ps() : until_ps;
+    until_ps_ = until_ps;
+    set_deadline();
     chip_.take_irq_dirty();
+    ++chunks_;
     const uc_err err = uc_emu_start(uc_, pc() | 1u, 0xFFFFFFFFu, 0, 0);
     if (err != UC_ERR_OK && !chip_.stopped()) {
       chip_.violation(std::string("the CPU stopped: ") + uc_strerror(err));

@@ -49,6 +49,9 @@ class Cpu : public Memory {
   };
   const std::map<unsigned, HandlerFigures>& handler_figures() const { return handler_figures_; }
 
+  // How many times the engine was started (each chunk of instructions).
+  uint64_t chunks() const { return chunks_; }
+
   bool read(uint32_t address, void* bytes, uint32_t count) override;
   bool write(uint32_t address, const void* bytes, uint32_t count) override;
 
@@ -71,9 +74,16 @@ class Cpu : public Memory {
   const ElfImage& image_;
   CpuOptions options_;
   uc_engine* uc_ = nullptr;
-  uint64_t deadline_ps_ = 0;
+  void set_deadline();
+  uint64_t deadline_cycles_ = 0;  // the chunk ends at this cycle count
+  uint64_t until_ps_ = 0;
+  uint64_t chunks_ = 0;
   uint32_t block_address_ = 0;
-  std::map<uint64_t, uint32_t> block_costs_;
+  struct BlockCost {
+    uint16_t size = 0;
+    uint16_t cycles = 0;
+  };
+  std::vector<BlockCost> flash_costs_ = std::vector<BlockCost>(256 * 1024 / 2);
   struct Active {
     unsigned exception;
     uint64_t entered_cycles;
