@@ -71,8 +71,18 @@ hmc_program(hmc_desk hmc-desk "desktop panel for the Hybrid Motor Controller boa
 hmc_program(hmc_emu hmc "the SAMD21 firmware image on an emulated chip" SEE_ALSO hmc hmc-sim)
 
 # ---- Shell completion: `hmc completion bash|zsh`, where bash-completion and zsh look --------
+# bash-completion.pc names its directory when it is installed; under our prefix it stays relative.
 find_package(PkgConfig QUIET)
 set(bash_completion_dir ${CMAKE_INSTALL_DATADIR}/bash-completion/completions)
+if(PkgConfig_FOUND)
+  pkg_get_variable(completionsdir bash-completion completionsdir)
+  if(completionsdir)
+    cmake_path(IS_PREFIX CMAKE_INSTALL_PREFIX "${completionsdir}" NORMALIZE under_prefix)
+    if(under_prefix)
+      cmake_path(RELATIVE_PATH completionsdir BASE_DIRECTORY ${CMAKE_INSTALL_PREFIX} OUTPUT_VARIABLE bash_completion_dir)
+    endif()
+  endif()
+endif()
 add_custom_command(OUTPUT ${hmc_install_files}/completion/hmc ${hmc_install_files}/completion/_hmc
                    COMMAND ${CMAKE_COMMAND} -E make_directory ${hmc_install_files}/completion
                    COMMAND sh -c "\"$1\" completion bash > \"$2\" && \"$1\" completion zsh > \"$3\""

@@ -17,6 +17,10 @@ set(CPACK_GENERATOR DEB)
 set(CPACK_PACKAGE_NAME hmc)
 set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
 set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
+# Staged through DESTDIR, so that absolute destinations (udev's own directory, when udev.pc
+# names one outside the configured prefix) land in the package, never on this machine.
+set(CPACK_SET_DESTDIR ON)
+set(CPACK_INSTALL_PREFIX /usr)
 set(CPACK_STRIP_FILES ON)
 set(CPACK_DEB_COMPONENT_INSTALL ON)
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
