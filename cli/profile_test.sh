@@ -86,6 +86,45 @@ expect json-errors 1 '"line":1,"message":"baud must be a whole number' -- "$hmc"
 expect bad-profile-no-board 1 'nothing was sent' -- "$hmc" --profile "$work/bad.toml" --port sim://never status
 [[ -e $work/state/sim-never.journal ]] && { failures=$((failures + 1)); echo "FAIL a bad profile opened the board"; }
 
+# --- axes by name, in their units, on the simulated board ----------------------------------------
+slider=(--profile "$src/examples/camera-slider.toml")
+expect home-slide 0 'motor 1: homed, at 0 steps' -- "$hmc" "${slider[@]}" --port 'sim://s?fresh&fast' home slide
+expect move-to-250mm 0 '^slide at 250 mm \(20000 steps of 1/16\), 0 mm/s, homed$' \
+  -- "$hmc" "${slider[@]}" --port 'sim://s?fast' move slide --to 250mm --speed 200mm/s --accel 1000mm/s2 --wait
+expect status-mm 0 '^  slide at 250 mm \(20000 steps of 1/16\), 0 mm/s, homed$' -- "$hmc" "${slider[@]}" --port 'sim://s?fast' status
+expect status-steps 0 '^1 +idle +20000 +20000 +1/16 ' -- "$hmc" "${slider[@]}" --port 'sim://s?fast' status
+expect status-json 0 '"axis": "slide",' -- "$hmc" "${slider[@]}" --port 'sim://s?fast' status --json
+expect status-json-mm 0 '"position": 250.0,' -- "$hmc" "${slider[@]}" --port 'sim://s?fast' status --json
+expect wrong-unit 2 "error: --to: axis 'slide' is linear: it takes mm, rev or steps, not deg" \
+  -- "$hmc" "${slider[@]}" --port 'sim://s?fast' move slide --to 90deg
+expect speed-as-position 2 "'mm/s' is a speed, but a position or distance is wanted here \(mm\)" \
+  -- "$hmc" "${slider[@]}" --port 'sim://s?fast' move slide --by 20mm/s
+expect soft-limit 1 "axis 'slide': 400 mm is beyond its soft limits, 0 to 310 mm" \
+  -- "$hmc" "${slider[@]}" --port 'sim://s?fast' move slide --to 400mm
+expect rounded 0 "note: --by -0.01mm on axis 'slide' is -0.8 steps: rounded to -1" \
+  -- "$hmc" "${slider[@]}" --port 'sim://s?fast' move slide --by -0.01mm --wait
+expect by-rev 0 '^slide at 209.988 mm \(16799 steps of 1/16\)' -- "$hmc" "${slider[@]}" --port 'sim://s?fast' move slide --by=-1rev --wait
+expect to-steps 0 '^slide at 250 mm \(20000 steps' -- "$hmc" "${slider[@]}" --port 'sim://s?fast' move slide --to 20000steps --wait
+expect already-there 0 'already there' -- "$hmc" "${slider[@]}" --port 'sim://s?fast' move slide --to 250mm
+expect stop-by-name 0 'motor 1: stopped' -- "$hmc" "${slider[@]}" --port 'sim://s?fast' stop slide
+expect unknown-axis 2 "no axis 'pan': give a motor 1-3 or an axis name; the profile's axes are slide \(1\)" \
+  -- "$hmc" "${slider[@]}" --port sim://nowhere move pan --to 1deg
+[[ -e $work/state/sim-nowhere.journal ]] && { failures=$((failures + 1)); echo "FAIL an unknown axis opened the board"; }
+expect to-with-steps 2 '--to and --by take the axis' -- "$hmc" "${slider[@]}" --port 'sim://s?fast' move slide 100 --to 1mm
+
+# Rotary axes, an inverted one, and a motor no profile axis drives (degrees at 200 steps per turn).
+pan_tilt=(--profile "$src/examples/pan-tilt-head.toml" --port 'sim://p?fresh&fast')
+expect pan-by 0 '^pan at -90 deg \(-2400 steps of 1/16\)' -- "$hmc" "${pan_tilt[@]}" move pan --by -90deg --wait
+expect tilt-inverted 0 '^motor 2: done, at -3200 steps' -- "$hmc" "${pan_tilt[@]}" move tilt --to 180deg --wait
+expect pan-mm 2 "axis 'pan' is rotary: it takes deg, rev or steps, not mm" -- "$hmc" "${pan_tilt[@]}" move pan --to 10mm
+expect motor-3-deg 0 '^motor 3 at 90 deg \(800 steps of 1/16\)' -- "$hmc" "${pan_tilt[@]}" move 3 --to 90deg --wait
+expect accel-number 0 'motor 1: done' -- "$hmc" "${pan_tilt[@]}" move 1 3200 --accel 8000 --wait
+
+# The profile's port, baud and firmware when the command line gives none.
+printf 'port = "sim://fromprofile?fast"\nbaud = 57600\n[axis.a]\nmotor = 1\nrotary = true\n' >"$work/port.toml"
+expect port-from-profile 0 'board: simulated board sim://fromprofile' -- "$hmc" --profile "$work/port.toml" status
+expect port-option-wins 0 'board: simulated board sim://other' -- "$hmc" --profile "$work/port.toml" --port 'sim://other?fast' status
+
 if ((failures > 0)); then
   echo "profile_test: $failures of $checks checks failed"
   exit 1
