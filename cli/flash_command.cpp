@@ -290,7 +290,10 @@ void run_step(const std::string& step, const std::string& tool_path, const std::
 // port (ArduinoCore-samd) resets into the bootloader when it sees this.
 void touch_1200(const std::string& port) {
   const int fd = ::open(port.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK);
-  if (fd < 0) fail(kExitIo, "1200-baud touch: cannot open " + port + ": " + std::strerror(errno));
+  if (fd < 0)
+    fail(kExitIo, "1200-baud touch: cannot open " + port + ": " + std::strerror(errno) +
+                      " (the touch reaches firmware with a native USB serial port, which the hmc firmware does not "
+                      "have: double-tap reset, then run again with --no-touch and the bootloader's port)");
   termios tio{};
   if (::tcgetattr(fd, &tio) == 0) {
     ::cfsetispeed(&tio, B1200);

@@ -141,7 +141,7 @@ install(CODE "
                             \"\$ENV{DESTDIR}\${CMAKE_INSTALL_PREFIX}/${CMAKE_INSTALL_LIBDIR}/$<TARGET_FILE_NAME:hmc>\"
                     COMMAND_ERROR_IS_FATAL ANY)
   endif()" COMPONENT libhmc-dev)
-foreach(module protocol link session motion)
+foreach(module protocol link session motion profile)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/hostlib/${module}/include/hmc DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
           COMPONENT libhmc-dev)
 endforeach()

@@ -91,12 +91,12 @@ TEST_CASE("a v2 board is detected and its state read") {
   auto s = open("sim://?fast");
   CHECK(s->firmware() == Firmware::kV2);
   REQUIRE(s->version().has_value());
-  CHECK(s->version()->protocol == 2);
+  CHECK(s->version()->protocol == hmc::proto::kProtocolVersion);
   CHECK(s->model().reported);
   CHECK(s->model().motor(1).state == MotorState::kIdle);
   CHECK(s->model().motor(1).microstep == 16);
   CHECK(s->model().board.servo1_us == 1472);  // centred at boot
-  CHECK(s->description().find("protocol 2") != std::string::npos);
+  CHECK(s->description().find("protocol " + std::to_string(hmc::proto::kProtocolVersion)) != std::string::npos);
 }
 
 TEST_CASE("a move is waited for and its end position comes from the board") {

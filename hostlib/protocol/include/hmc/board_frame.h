@@ -107,7 +107,7 @@ struct Booted {
 };
 
 // How a motion ended (EVD): the values are proto::kEnd*.
-enum class MotionEnd : uint8_t { kCompleted = 1, kStopped, kLimit, kEmergency, kDropped };
+enum class MotionEnd : uint8_t { kCompleted = 1, kStopped, kLimit, kEmergency, kDropped, kWatchdog };
 
 // EVD: a motion ended.
 struct MotionEnded {
@@ -146,9 +146,16 @@ struct DriverFault {
   bool operator==(const DriverFault& o) const { return motor == o.motor && status == o.status; }
 };
 
+// STW (STA 7, protocol 3): the link watchdog.
+struct WatchdogStatus {
+  uint32_t timeout_ms = 0;  // armed with this timeout; 0 off
+  bool fired = false;       // it braked the motors since it was last armed
+  bool operator==(const WatchdogStatus& o) const { return timeout_ms == o.timeout_ms && fired == o.fired; }
+};
 // Ordered by proto::BoardFrameId.
 using BoardFrame = std::variant<Ack, Nak, Version, MotorStatus, BoardStatus, StripStatus, SettingValue, Booted,
-                                MotionEnded, HomingEnded, LimitChanged, EmergencyChanged, DriverFault>;
+                                MotionEnded, HomingEnded, LimitChanged, EmergencyChanged, DriverFault,
+                                WatchdogStatus>;
 
 proto::BoardFrameId board_frame_id(const BoardFrame& frame);
 const proto::BoardFrameSpec& board_frame_spec(const BoardFrame& frame);
