@@ -4,10 +4,11 @@
 #                 docs and the example motion files
 #   libhmc-dev    libhmc.a, its headers, the CMake package (find_package(hmc)) and hmc.pc
 #   hmc-desk      the desktop panel, when it is built
+#   hmc-emu       the board emulator and its bootloader (they need Unicorn, which hmc does not)
 #   hmc-firmware  the SAMD21 images from the firmware preset (cmake --preset firmware), read from
 #                 HMC_FIRMWARE_DIR at install time: build that preset first
-# Programs that other folders add install the same way: add their target to hmc_programs below
-# (hmc-emu: its target hmc_emu is picked up here as soon as it exists).
+# Programs that other folders add install the same way: one hmc_program() line below, and their
+# name in the SEE ALSO list of hmc(1).
 # Debian puts libraries, and the .pc and CMake files beside them, in the multiarch directory,
 # under any prefix (ld.so, pkg-config and find_package search it); GNUInstallDirs does so only
 # for /usr, so the packages would not.
@@ -57,7 +58,7 @@ function(hmc_program target component summary)
 endfunction()
 
 set(hmc_programs "")
-foreach(target hmc_sim hmc_uf2_tool hmc_desk hmc_emu)
+foreach(target hmc_sim hmc_uf2_tool hmc_desk hmc_emu hmc_emu_bootloader_tool)
   if(TARGET ${target})
     get_target_property(name ${target} OUTPUT_NAME)
     list(APPEND hmc_programs ${name})
@@ -68,7 +69,8 @@ hmc_program(hmc_cli hmc "drive the Hybrid Motor Controller board: frames, moves,
 hmc_program(hmc_sim hmc "the Hybrid Motor Controller's firmware on a simulated board" SEE_ALSO hmc)
 hmc_program(hmc_uf2_tool hmc "convert and check UF2 images for the SAMD21 bootloader" SEE_ALSO hmc)
 hmc_program(hmc_desk hmc-desk "desktop panel for the Hybrid Motor Controller board" SEE_ALSO hmc)
-hmc_program(hmc_emu hmc "the SAMD21 firmware image on an emulated chip" SEE_ALSO hmc hmc-sim)
+hmc_program(hmc_emu hmc-emu "the SAMD21 board emulated, running the firmware image" SEE_ALSO hmc hmc-sim hmc-emu-bootloader)
+hmc_program(hmc_emu_bootloader_tool hmc-emu "the SAMD21 bootloader emulated, for bossac and UF2 copies" SEE_ALSO hmc-emu)
 
 # ---- Shell completion: `hmc completion bash|zsh`, where bash-completion and zsh look --------
 # bash-completion.pc names its directory when it is installed; under our prefix it stays relative.

@@ -34,6 +34,9 @@ set(CPACK_COMPONENTS_ALL hmc libhmc-dev hmc-firmware)
 if(TARGET hmc_desk)
   list(APPEND CPACK_COMPONENTS_ALL hmc-desk)
 endif()
+if(TARGET hmc_emu)
+  list(APPEND CPACK_COMPONENTS_ALL hmc-emu)
+endif()
 
 foreach(pkg ${CPACK_COMPONENTS_ALL})
   string(TOUPPER ${pkg} component)
@@ -67,6 +70,15 @@ set(CPACK_COMPONENT_HMC-DESK_DESCRIPTION
 hmc-desk shows the board's motors, switches, servos and LED strips and
 drives them with the mouse, on a real board or the simulated one.")
 set(CPACK_DEBIAN_HMC-DESK_PACKAGE_SUGGESTS "hmc")
+
+set(CPACK_COMPONENT_HMC-EMU_DESCRIPTION
+    "SAMD21 emulator for the Hybrid Motor Controller's firmware
+hmc-emu runs the board's firmware image on an emulated SAMD21 (Cortex-M0+ on
+the Unicorn engine, with the chip's peripherals and the board's DRV8711s),
+serving the serial protocol like the real board. hmc-emu-bootloader plays
+the SAM-BA bootloader and the UF2 drive, so bossac and hmc flash can be run
+against it.")
+set(CPACK_DEBIAN_HMC-EMU_PACKAGE_SUGGESTS "hmc, bossa-cli")
 
 set(CPACK_COMPONENT_HMC-FIRMWARE_DESCRIPTION
     "SAMD21 firmware images for the Hybrid Motor Controller (${HMC_BOARD_VARIANT})
