@@ -34,6 +34,7 @@ public:
   Nvmctrl& nvm() { return nvm_; }
   // True once software asked for a system reset (AIRCR written with VECTKEY and SYSRESETREQ).
   bool reset_requested() const { return reset_requested_; }
+  void clear_reset_request() { reset_requested_ = false; }
   // NVMCTRL's refusals since the last call.
   std::vector<std::string> take_violations();
 

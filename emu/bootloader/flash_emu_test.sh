@@ -2,12 +2,13 @@
 # Flashing end to end against the emulated bootloader (hmc-emu-bootloader): Debian's real bossac
 # and `hmc flash` over the pseudo-terminal that stands for the native USB port, the UF2 method
 # into the directory that stands for the bootloader's drive; each run ends with the flash
-# compared with the image. Usage:
-#   flash_emu_test.sh HMC_EMU_BOOTLOADER HMC HMC_UF2 FIRMWARE_DIR
+# compared with the image; then hmc-emu, flashed the same way, boots the written image and answers
+# VER. Usage:
+#   flash_emu_test.sh HMC_EMU_BOOTLOADER HMC HMC_UF2 FIRMWARE_DIR HMC_EMU
 # The firmware image is built by the firmware preset; without it the test is skipped (exit 77),
 # unless HMC_REQUIRE_FIRMWARE=1 (scripts/test), which makes a missing image a failure.
 set -uo pipefail
-emu=$1 hmc=$2 uf2tool=$3 fwdir=$4
+emu=$1 hmc=$2 uf2tool=$3 fwdir=$4 hmcemu=$5
 image=$fwdir/hmc-firmware.bin
 uf2=$fwdir/hmc-firmware.uf2
 if [[ ! -f $image || ! -f $uf2 ]]; then
@@ -41,6 +42,7 @@ EOF
 start_emu() {
   local name=$1
   shift
+  : >"$tmp/$name.emu.log"
   "$emu" --flash "$tmp/before.bin" --flash-out "$tmp/$name.flash" "$@" 2>"$tmp/$name.emu.log" &
   emu_pid=$!
   for _ in $(seq 50); do
@@ -63,7 +65,7 @@ wait_emu() {
   fi
   wait "$emu_pid"
   emu_pid=
-  grep -q 'the bootloader would start the application' "$tmp/$name.emu.log" ||
+  grep -q 'the bootloader starts the application' "$tmp/$name.emu.log" ||
     fail "$name: no reset in the emulator's log: $(cat "$tmp/$name.emu.log")"
 }
 
@@ -137,8 +139,33 @@ grep -q "hmc-firmware.uf2: $(($(stat -c %s "$uf2") / 512)) of .* blocks written"
   fail "uf2: $(cat "$tmp/uf2.emu.log")"
 check_flash uf2 0xFF
 
+# --- 6. hmc-emu: a board with an erased application flash sits in its bootloader; flashed by
+# hmc flash over its USB port, it resets, boots the written image and answers VER on its UART ---
+: >"$tmp/hmc-emu.log"
+"$hmcemu" --fast --pty --usb-pty "$tmp/usb" 2>"$tmp/hmc-emu.log" &
+emu_pid=$!
+for _ in $(seq 50); do
+  grep -q 'usb pty' "$tmp/hmc-emu.log" && break
+  sleep 0.05
+done
+uart=$(sed -n 's/^hmc-emu: pty \(.*\)$/\1/p' "$tmp/hmc-emu.log")
+[[ -n $uart ]] || fail "hmc-emu: no UART pty: $(cat "$tmp/hmc-emu.log")"
+timeout 60 "$hmc" flash "$image" --no-touch --port "$tmp/usb" >"$tmp/hmc-emu-flash.out" 2>&1 ||
+  fail "hmc flash into hmc-emu: exit $?: $(cat "$tmp/hmc-emu-flash.out")"
+# The image boots after the reset; until its UART answers, a VER goes unanswered: ask again.
+for _ in $(seq 20); do
+  timeout 20 "$hmc" --port "$uart" send VER >"$tmp/ver.out" 2>&1 && break
+  sleep 0.5
+done
+grep -q 'VER (reply): protocol' "$tmp/ver.out" || fail "VER after flashing: $(cat "$tmp/ver.out")"
+grep -q 'the bootloader starts the application at 0x2000' "$tmp/hmc-emu.log" ||
+  fail "hmc-emu: no start of the application: $(cat "$tmp/hmc-emu.log")"
+kill "$emu_pid"
+wait "$emu_pid"
+emu_pid=
+
 if [[ $failures -ne 0 ]]; then
   echo "$failures failure(s)"
   exit 1
 fi
-echo "flash_emu_test: bossac, hmc flash (no touch, touch), BOOTPROT and UF2 all passed"
+echo "flash_emu_test: bossac, hmc flash (no touch, touch), BOOTPROT, UF2 and hmc-emu booting the flashed image all passed"

@@ -28,7 +28,7 @@ constexpr uint32_t kUserRowWord1 = 0xFFFFFC5D;
 // USB TRIM 57:55, DFLL48M COARSE CAL 63:58, DFLL48M FINE CAL 73:64. Every part has its own
 // values; these are a guess in the range real parts report, chosen so that no field reads as
 // erased (COARSE 0x3F means "not calibrated" to the Arduino startup code).
-constexpr uint64_t kCalibrationLow = (uint64_t{0x1C} << 58) | (uint64_t{0x5} << 55) | (uint64_t{0x1D} << 50) |
+constexpr uint64_t kCalibrationLow = (uint64_t{0x1E} << 58) | (uint64_t{0x5} << 55) | (uint64_t{0x1D} << 50) |
                                      (uint64_t{0x05} << 45) | (uint64_t{0x40} << 38) | (uint64_t{0x7} << 35) |
                                      (uint64_t{0x3A} << 27);
 constexpr uint32_t kCalibrationFine = 0x200;
