@@ -140,29 +140,37 @@ grep -q "hmc-firmware.uf2: $(($(stat -c %s "$uf2") / 512)) of .* blocks written"
 check_flash uf2 0xFF
 
 # --- 6. hmc-emu: a board with an erased application flash sits in its bootloader; flashed by
-# hmc flash over its USB port, it resets, boots the written image and answers VER on its UART ---
-: >"$tmp/hmc-emu.log"
-"$hmcemu" --fast --pty --usb-pty "$tmp/usb" 2>"$tmp/hmc-emu.log" &
-emu_pid=$!
-for _ in $(seq 50); do
-  grep -q 'usb pty' "$tmp/hmc-emu.log" && break
-  sleep 0.05
-done
-uart=$(sed -n 's/^hmc-emu: pty \(.*\)$/\1/p' "$tmp/hmc-emu.log")
-[[ -n $uart ]] || fail "hmc-emu: no UART pty: $(cat "$tmp/hmc-emu.log")"
-timeout 60 "$hmc" flash "$image" --no-touch --port "$tmp/usb" >"$tmp/hmc-emu-flash.out" 2>&1 ||
-  fail "hmc flash into hmc-emu: exit $?: $(cat "$tmp/hmc-emu-flash.out")"
-# The image boots after the reset; until its UART answers, a VER goes unanswered: ask again.
-for _ in $(seq 20); do
-  timeout 20 "$hmc" --port "$uart" send VER >"$tmp/ver.out" 2>&1 && break
-  sleep 0.5
-done
-grep -q 'VER (reply): protocol' "$tmp/ver.out" || fail "VER after flashing: $(cat "$tmp/ver.out")"
-grep -q 'the bootloader starts the application at 0x2000' "$tmp/hmc-emu.log" ||
-  fail "hmc-emu: no start of the application: $(cat "$tmp/hmc-emu.log")"
-kill "$emu_pid"
-wait "$emu_pid"
-emu_pid=
+# hmc flash (bossac over its USB port, or a UF2 copy to its drive), it resets, boots the written
+# image and answers VER on its UART ---
+# emu_boots NAME BOOTLOADER_OPTION FLASH_COMMAND...
+emu_boots() {
+  local name=$1 option=$2 value=$3
+  shift 3
+  : >"$tmp/$name.emu.log"
+  "$hmcemu" --fast --pty "$option" "$value" 2>"$tmp/$name.emu.log" &
+  emu_pid=$!
+  for _ in $(seq 50); do
+    grep -q -e 'usb pty' -e 'uf2 drive' "$tmp/$name.emu.log" && break
+    sleep 0.05
+  done
+  local uart
+  uart=$(sed -n 's/^hmc-emu: pty \(.*\)$/\1/p' "$tmp/$name.emu.log")
+  [[ -n $uart ]] || fail "$name: no UART pty: $(cat "$tmp/$name.emu.log")"
+  timeout 60 "$@" >"$tmp/$name.out" 2>&1 || fail "$name: $* exited $?: $(cat "$tmp/$name.out")"
+  # The image boots after the reset; until its UART answers, a VER goes unanswered: ask again.
+  for _ in $(seq 20); do
+    timeout 20 "$hmc" --port "$uart" send VER >"$tmp/$name.ver" 2>&1 && break
+    sleep 0.5
+  done
+  grep -q 'VER (reply): protocol' "$tmp/$name.ver" || fail "$name: VER after flashing: $(cat "$tmp/$name.ver")"
+  grep -q 'the bootloader starts the application at 0x2000' "$tmp/$name.emu.log" ||
+    fail "$name: no start of the application: $(cat "$tmp/$name.emu.log")"
+  kill "$emu_pid"
+  wait "$emu_pid"
+  emu_pid=
+}
+emu_boots hmc-emu-bossac --usb-pty "$tmp/usb" "$hmc" flash "$image" --no-touch --port "$tmp/usb"
+emu_boots hmc-emu-uf2 --uf2-drive "$tmp/drive6" "$hmc" flash "$uf2" --method uf2 --drive "$tmp/drive6"
 
 if [[ $failures -ne 0 ]]; then
   echo "$failures failure(s)"
