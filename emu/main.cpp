@@ -154,6 +154,9 @@ class Emulator {
         const auto wall = std::chrono::steady_clock::now() - origin;
         target = static_cast<uint64_t>(
                      std::chrono::duration_cast<std::chrono::nanoseconds>(wall).count()) * 1000u;
+        // Behind the wall clock (the emulation is slower than the chip): catch up in slices,
+        // looking at the link between them.
+        if (target > now_ps() + 10 * kPsPerMs) target = now_ps() + 10 * kPsPerMs;
       }
       if (target > limit) target = limit;
       if (target > now_ps()) machine_.cpu->run_until(target - time_offset_ps_);
@@ -289,6 +292,8 @@ int run(const Options& options) {
     std::fprintf(stderr, "hmc-emu: %.3f s virtual in %.3f s wall (%.2fx real time), %" PRIu64
                          " cycles in %" PRIu64 " chunks\n", virtual_s, wall, virtual_s / wall,
                  m.chip->cycles(), m.cpu->chunks());
+    std::fprintf(stderr, "hmc-emu: command UART: %" PRIu64 " received bytes lost to overflow\n",
+                 m.chip->sercom(kUartSercom).rx_overflows());
     for (const auto& [exception, figures] : m.cpu->handler_figures()) {
       std::fprintf(stderr, "hmc-emu: exception %u: %" PRIu64 " entries, %.1f cycles each\n",
                    exception, figures.count,

@@ -193,17 +193,19 @@ void Cpu::on_block(uc_engine*, uint64_t address, uint32_t size, void* user) {
   Cpu& cpu = *static_cast<Cpu*>(user);
   Chip& chip = cpu.chip_;
   cpu.block_address_ = static_cast<uint32_t>(address);
-  chip.charge_cycles(cpu.block_cost(address, size));
   if (chip.reschedule_requested() && !chip.stopped()) {
     // A register write moved a peripheral's next event or the CPU clock: catch up and take the
     // new deadline without leaving the engine (no CPU state changes here).
     chip.advance();
     cpu.set_deadline();
   }
+  // A stop requested here takes effect before the block runs: the block is charged only when
+  // it runs.
   if (chip.stopped() || chip.cycles() >= cpu.deadline_cycles_) {
     uc_emu_stop(cpu.uc_);
     return;
   }
+  chip.charge_cycles(cpu.block_cost(address, size));
   if (chip.take_irq_dirty()) {
     const bool primask = (cpu.reg(UC_ARM_REG_PRIMASK) & 1) != 0;
     if (chip.scs().ready_exception(primask) != 0) {
@@ -340,8 +342,24 @@ void Cpu::set_deadline() {
   deadline_cycles_ = chip_.cycles_at(ps);
 }
 
+// When the engine is stopped while an EXC_RETURN branch is in flight, it completes the return
+// itself at the next start (its own M-profile unstacking) without the interrupt hook: the
+// bookkeeping then follows IPSR, which names the exception still running (0: none).
+void Cpu::sync_active() {
+  const unsigned ipsr = reg(UC_ARM_REG_IPSR) & 0x3F;
+  while (!active_.empty() && active_.back().exception != ipsr) {
+      const Active done = active_.back();
+    active_.pop_back();
+    HandlerFigures& figures = handler_figures_[done.exception];
+    ++figures.count;
+    figures.cycles += chip_.cycles() - done.entered_cycles + kEntryCycles + kReturnCycles;
+    chip_.scs().complete(done.exception);
+  }
+}
+
 void Cpu::run_until(uint64_t until_ps) {
   while (!chip_.stopped() && chip_.now_ps() < until_ps) {
+    sync_active();
     chip_.advance();
     if (chip_.stopped()) break;
     const bool primask = (reg(UC_ARM_REG_PRIMASK) & 1) != 0;
