@@ -6,14 +6,14 @@
 # VER. Usage:
 #   flash_emu_test.sh HMC_EMU_BOOTLOADER HMC HMC_UF2 FIRMWARE_DIR HMC_EMU
 # The firmware image is built by the firmware preset; without it the test is skipped (exit 77),
-# unless HMC_REQUIRE_FIRMWARE=1 (scripts/test), which makes a missing image a failure.
+# unless CI is set: then its absence is a failure.
 set -uo pipefail
 emu=$1 hmc=$2 uf2tool=$3 fwdir=$4 hmcemu=$5
 image=$fwdir/hmc-firmware.bin
 uf2=$fwdir/hmc-firmware.uf2
 if [[ ! -f $image || ! -f $uf2 ]]; then
   echo "no firmware image in $fwdir (cmake --preset firmware && cmake --build --preset firmware)"
-  [[ ${HMC_REQUIRE_FIRMWARE:-0} == 1 ]] && exit 1
+  [[ ${CI:-} == true ]] && exit 1
   exit 77
 fi
 command -v bossac >/dev/null || { echo "bossac is not installed (Debian package bossa-cli)"; exit 1; }
