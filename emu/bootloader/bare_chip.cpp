@@ -1,16 +1,10 @@
 // The bootloader's memory map without the CPU (bare_chip.h).
 #include "bare_chip.h"
 
-#include <cstdio>
+#include "hex.h"
 
 namespace hmc::emu {
 namespace {
-
-std::string hex(uint32_t v) {
-  char text[16];
-  std::snprintf(text, sizeof text, "0x%08X", v);
-  return text;
-}
 
 bool in(uint32_t address, uint32_t base, uint32_t size) { return address >= base && address - base < size; }
 
@@ -28,7 +22,7 @@ std::vector<std::string> BareChip::take_violations() {
 bool BareChip::read(uint32_t address, unsigned size, uint32_t& value, std::string& error) {
   value = 0;
   if (address % size != 0) {
-    error = "unaligned " + std::to_string(size) + "-byte read at " + hex(address);
+    error = "unaligned " + std::to_string(size) + "-byte read at " + hex32(address);
     return false;
   }
   if (Nvmctrl::in_nvm_space(address)) {
@@ -58,13 +52,13 @@ bool BareChip::read(uint32_t address, unsigned size, uint32_t& value, std::strin
     value = (0xFA050000u >> shift) & mask;
     return true;
   }
-  error = "read of " + hex(address) + ": nothing there in the bootloader's memory map";
+  error = "read of " + hex32(address) + ": nothing there in the bootloader's memory map";
   return false;
 }
 
 bool BareChip::write(uint32_t address, uint32_t value, unsigned size, std::string& error) {
   if (address % size != 0) {
-    error = "unaligned " + std::to_string(size) + "-byte write at " + hex(address);
+    error = "unaligned " + std::to_string(size) + "-byte write at " + hex32(address);
     return false;
   }
   if (Nvmctrl::in_nvm_space(address)) {
@@ -85,7 +79,7 @@ bool BareChip::write(uint32_t address, uint32_t value, unsigned size, std::strin
     if ((value >> 16) == 0x05FA && (value & (1u << 2)) != 0) reset_requested_ = true;
     return true;
   }
-  error = "write of " + hex(value) + " to " + hex(address) + ": nothing writable there in the bootloader's memory map";
+  error = "write of " + hex32(value) + " to " + hex32(address) + ": nothing writable there in the bootloader's memory map";
   return false;
 }
 
