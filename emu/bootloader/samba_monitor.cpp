@@ -30,9 +30,8 @@ void put_le(std::string& out, uint32_t v, unsigned size) {
 
 }  // namespace
 
-SambaMonitor::SambaMonitor(TargetBus& bus, std::function<void(const std::string&)> log,
-                           std::function<bool(uint32_t)> go)
-    : bus_(bus), flash_(bus), log_(std::move(log)), go_(std::move(go)) {}
+SambaMonitor::SambaMonitor(TargetBus& bus, std::function<void(const std::string&)> log)
+    : bus_(bus), flash_(bus), log_(std::move(log)) {}
 
 void SambaMonitor::fail(const std::string& what) {
   if (log_) log_(what);
@@ -113,7 +112,7 @@ void SambaMonitor::execute(char command, uint32_t address, uint32_t number, std:
       }
       return;
     case 'G':
-      if (!go_ || !go_(number)) fail("bootloader: G" + hex32(number) + ": running code needs the emulated CPU");
+      fail("bootloader: G" + hex32(number) + ": running code needs the emulated CPU");
       return;
     case 'X':
       erase_from(number);
