@@ -60,7 +60,6 @@ BootloaderEnd run_bootloader(BareChip& chip, const BootloaderPorts& ports, const
       if (n > 0 && !in_application && !port.send(monitor.receive(buffer, static_cast<size_t>(n))))
         say("the host stopped reading the USB port; answer dropped");
     }
-    for (const std::string& v : chip.take_violations()) say(v);
     const bool flashed = !ports.uf2_drive.empty() && uf2.poll();
     if (!chip.reset_requested() && !flashed) continue;
     chip.clear_reset_request();
