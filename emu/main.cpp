@@ -6,6 +6,7 @@
 #include <signal.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cinttypes>
 #include <cstdio>
@@ -14,6 +15,8 @@
 #include <optional>
 
 #include "board/board.h"
+#include "bootloader/bare_chip.h"
+#include "bootloader/bootloader_session.h"
 #include "chip/chip.h"
 #include "chip/port.h"
 #include "chip/sercom.h"
@@ -53,7 +56,51 @@ struct Options {
   bool run_fault_handler = false;
   bool quiet = false;
   bool stats = false;
+  // Start in the bootloader (docs/emu.md, "Flashing"): the native USB port, the UF2 drive.
+  std::string usb_pty;
+  std::string uf2_drive;
+  bool touch_to_enter = false;
 };
+
+// The bootloader's run before the first boot: the flash starts with the image's bytes (or erased
+// without an image), the host flashes through the USB port or the UF2 drive, and the board then
+// boots what the flash holds from 0x2000. `image` becomes that flash content; the image's
+// function names stay only if the flash still holds the image's bytes.
+int run_bootloader_first(const Options& options, ElfImage& image) {
+  BareChip chip;
+  for (const Segment& s : image.segments) {
+    if (!chip.nvm().load_flash(s.address, s.bytes)) {
+      std::cerr << "hmc-emu: the image has bytes at 0x" << std::hex << s.address << std::dec
+                << ", outside the 256 KB flash\n";
+      return kExitImage;
+    }
+  }
+  BootloaderPorts ports;
+  ports.usb = !options.usb_pty.empty();
+  ports.usb_link = options.usb_pty;
+  ports.uf2_drive = options.uf2_drive;
+  ports.touch_to_enter = options.touch_to_enter;
+  std::string error;
+  const auto say = [&](const std::string& line) {
+    if (!options.quiet || line.rfind("usb pty", 0) == 0 || line.rfind("uf2 drive", 0) == 0)
+      std::cerr << "hmc-emu: " << line << std::endl;
+  };
+  switch (run_bootloader(chip, ports, g_stop, say, error)) {
+    case BootloaderEnd::kError: std::cerr << "hmc-emu: " << error << '\n'; return kExitIo;
+    case BootloaderEnd::kStopped: return kExitOk;
+    case BootloaderEnd::kStartApplication: break;
+  }
+  const std::vector<uint8_t>& flash = chip.nvm().flash();
+  bool same = !image.segments.empty();
+  for (const Segment& s : image.segments)
+    same = same && std::equal(s.bytes.begin(), s.bytes.end(), flash.begin() + s.address);
+  ElfImage flashed;
+  flashed.segments.push_back(Segment{kAppBase, std::vector<uint8_t>(flash.begin() + kAppBase, flash.end())});
+  flashed.entry = image.entry;
+  if (same) flashed.functions = image.functions;
+  image = std::move(flashed);
+  return -1;
+}
 
 // One power cycle of the board: the chip, the CPU on it, the image in its flash.
 struct Machine {
@@ -107,6 +154,9 @@ class Emulator {
         const auto wall = std::chrono::steady_clock::now() - origin;
         target = static_cast<uint64_t>(
                      std::chrono::duration_cast<std::chrono::nanoseconds>(wall).count()) * 1000u;
+        // Behind the wall clock (the emulation is slower than the chip): catch up in slices,
+        // looking at the link between them.
+        if (target > now_ps() + 10 * kPsPerMs) target = now_ps() + 10 * kPsPerMs;
       }
       if (target > limit) target = limit;
       if (target > now_ps()) machine_.cpu->run_until(target - time_offset_ps_);
@@ -194,12 +244,17 @@ class Emulator {
 int run(const Options& options) {
   ElfImage image;
   std::string error;
-  if (!load_elf(options.image, image, error)) {
+  const bool bootloader_first = !options.usb_pty.empty() || !options.uf2_drive.empty();
+  if (options.image.empty() && !bootloader_first) {
+    std::cerr << "hmc-emu: give the firmware ELF, or --usb-pty/--uf2-drive to flash one first\n";
+    return kExitUsage;
+  }
+  if (!options.image.empty() && !load_elf(options.image, image, error)) {
     std::cerr << "hmc-emu: " << error << '\n';
     return errno == ENOENT || error.rfind("cannot read", 0) == 0 ? kExitIo : kExitImage;
   }
   const uint32_t base = image.lowest_address();
-  if (base != 0 && base != kAppBase) {
+  if (!image.segments.empty() && base != 0 && base != kAppBase) {
     std::cerr << "hmc-emu: '" << options.image << "' is linked at 0x" << std::hex << base
               << std::dec << ": a SAMD21 image starts at 0x0 (no bootloader) or 0x2000 (behind "
               << "the bootloader)\n";
@@ -218,6 +273,10 @@ int run(const Options& options) {
   signal(SIGINT, request_stop);
   signal(SIGTERM, request_stop);
   signal(SIGPIPE, SIG_IGN);
+  if (bootloader_first) {
+    const int code = run_bootloader_first(options, image);
+    if (code >= 0) return code;
+  }
 
   Emulator emulator(options, image, **link.value);
   if (!emulator.power_on(Pm::kCausePowerOn, error)) {
@@ -233,6 +292,8 @@ int run(const Options& options) {
     std::fprintf(stderr, "hmc-emu: %.3f s virtual in %.3f s wall (%.2fx real time), %" PRIu64
                          " cycles in %" PRIu64 " chunks\n", virtual_s, wall, virtual_s / wall,
                  m.chip->cycles(), m.cpu->chunks());
+    std::fprintf(stderr, "hmc-emu: command UART: %" PRIu64 " received bytes lost to overflow\n",
+                 m.chip->sercom(kUartSercom).rx_overflows());
     for (const auto& [exception, figures] : m.cpu->handler_figures()) {
       std::fprintf(stderr, "hmc-emu: exception %u: %" PRIu64 " entries, %.1f cycles each\n",
                    exception, figures.count,
@@ -248,7 +309,9 @@ int run(const Options& options) {
 int main(int argc, char** argv) {
   hmc::emu::Options options;
   CLI::App app{"hmc-emu: runs the SAMD21 firmware image on an emulated board (docs/emu.md)"};
-  app.add_option("image", options.image, "the firmware ELF (hmc-firmware.elf)")->required();
+  app.add_option("image", options.image,
+                 "the firmware ELF (hmc-firmware.elf); with --usb-pty/--uf2-drive, what the flash holds "
+                 "before flashing (default: erased)");
   app.add_flag("--pty", options.pty, "serve the command UART on a new pseudo-terminal (its path is printed)");
   app.add_flag("--fast", options.fast, "run virtual time unthrottled instead of in real time");
   app.add_option("--baud", options.baud, "the host side's baud rate (the image's own is 115200)")
@@ -266,6 +329,14 @@ int main(int argc, char** argv) {
   app.add_flag("--run-fault-handler", options.run_fault_handler,
                "a HardFault runs the image's handler (default: it stops the emulator as an error)");
   app.add_flag("--quiet", options.quiet, "no notes on standard error");
+  app.add_option("--usb-pty", options.usb_pty,
+                 "start in the bootloader: the SAM-BA monitor (bossac) on a pseudo-terminal named by "
+                 "this link, standing for the native USB port; the board boots what is flashed");
+  app.add_option("--uf2-drive", options.uf2_drive,
+                 "start in the bootloader: its UF2 drive as this directory; a .uf2 copied there is flashed "
+                 "and booted");
+  app.add_flag("--touch-to-enter", options.touch_to_enter,
+               "with --usb-pty: the port starts as an application's and a 1200-baud touch enters the bootloader");
   app.add_flag("--stats", options.stats, "print virtual/wall time and cycles per handler at the end");
   try {
     app.parse(argc, argv);

@@ -1,14 +1,16 @@
-// The memory map a SAMD21 shows while its CPU sits in the bootloader, for running the monitor
-// and the UF2 drive without the emulated CPU: the NVM and NVMCTRL (nvmctrl.h), the 32 KB of RAM,
-// the DSU's device id and the SCB's CPUID and AIRCR (whose SYSRESETREQ ends the bootloader).
-// Everything else answers with a bus error naming the address. hmc-emu's full chip serves the
-// same addresses through the same TargetBus interface.
+// The SAMD21 while its CPU sits in the bootloader, for running the monitor and the UF2 drive
+// without the emulated CPU: the emulated chip (chip/chip.h: its peripherals, NVMCTRL with the
+// NVM, the SCS with CPUID and AIRCR, the PM's bus clock masks) plus the 32 KB of RAM and the
+// DSU's device id, which only the bootloader's host reads. An access nothing answers, or one the
+// chip refuses (a masked bus clock, NVMCTRL's rules), fails with the reason. The chip keeps only
+// its first violation, so after one the later refusals go unreported.
 #pragma once
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "chip/chip.h"
 #include "nvmctrl.h"
 #include "target_bus.h"
 
@@ -16,13 +18,9 @@ namespace hmc::emu {
 
 class BareChip : public TargetBus {
 public:
-  // Identification (register description: DSU DID reset value 0x10010305 = ATSAMD21G18A,
-  // revision D; ARM DDI0484C: the Cortex-M0+ r0p1 CPUID 0x410CC601).
+  // DSU DID: the register description's reset value 0x10010305 = ATSAMD21G18A, revision D.
   static constexpr uint32_t kDsuDid = 0x41002018;
   static constexpr uint32_t kDeviceId = 0x10010305;
-  static constexpr uint32_t kCpuidAddress = 0xE000ED00;
-  static constexpr uint32_t kCpuid = 0x410CC601;
-  static constexpr uint32_t kAircr = 0xE000ED0C;
   static constexpr uint32_t kRamBase = 0x20000000;
   static constexpr uint32_t kRamSize = 32 * 1024;
 
@@ -31,17 +29,17 @@ public:
   bool read(uint32_t address, unsigned size, uint32_t& value, std::string& error) override;
   bool write(uint32_t address, uint32_t value, unsigned size, std::string& error) override;
 
-  Nvmctrl& nvm() { return nvm_; }
+  Nvmctrl& nvm() { return chip_.nvmctrl(); }
   // True once software asked for a system reset (AIRCR written with VECTKEY and SYSRESETREQ).
-  bool reset_requested() const { return reset_requested_; }
-  // NVMCTRL's refusals since the last call.
-  std::vector<std::string> take_violations();
-
+  bool reset_requested() const { return chip_.reset_requested(); }
+  void clear_reset_request() { chip_.clear_reset_request(); }
 private:
-  std::vector<std::string> violations_;
-  Nvmctrl nvm_;
+  bool peripheral(uint32_t address) const;
+  bool refused(std::string& error);
+
+  Chip chip_;
   std::vector<uint8_t> ram_;
-  bool reset_requested_ = false;
+  std::string reported_;  // the chip's violation already handed out
 };
 
 }  // namespace hmc::emu

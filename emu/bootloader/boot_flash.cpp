@@ -1,21 +1,10 @@
 // The bootloader's flash routines over NVMCTRL (boot_flash.h).
 #include "boot_flash.h"
 
-#include <cstdio>
-
+#include "hex.h"
 #include "nvmctrl.h"
 
 namespace hmc::emu {
-namespace {
-
-std::string hex(uint32_t v) {
-  char text[16];
-  std::snprintf(text, sizeof text, "0x%08X", v);
-  return text;
-}
-
-}  // namespace
-
 bool BootFlash::command(uint32_t byte_address, uint8_t command, std::string& error) {
   constexpr uint32_t base = Nvmctrl::kBase;
   uint32_t flags = 0;
@@ -34,7 +23,7 @@ bool BootFlash::command(uint32_t byte_address, uint8_t command, std::string& err
   const char* why = (status & Nvmctrl::kLockE) != 0   ? " (LOCKE: a locked region or the boot section)"
                     : (status & Nvmctrl::kProgE) != 0 ? " (PROGE)"
                                                       : "";
-  error = "NVMCTRL command " + hex(command) + " at " + hex(byte_address) + " failed, STATUS " + hex(status) + why;
+  error = "NVMCTRL command " + hex32(command) + " at " + hex32(byte_address) + " failed, STATUS " + hex32(status) + why;
   return false;
 }
 

@@ -2,9 +2,7 @@
 // pseudo-terminal standing for the native USB port, and/or the UF2 drive as a directory, over the
 // chip's NVM and NVMCTRL. It ends when the bootloader would start the application (bossac -R's
 // reset, or a UF2 file taken), writing the flash to --flash-out. docs/emu.md, "Flashing".
-#include <poll.h>
 #include <signal.h>
-#include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
@@ -15,9 +13,7 @@
 #include <vector>
 
 #include "bare_chip.h"
-#include "samba_monitor.h"
-#include "uf2_drive.h"
-#include "usb_pty.h"
+#include "bootloader_session.h"
 
 namespace {
 
@@ -81,7 +77,6 @@ int main(int argc, char** argv) {
     }
   }
   if (!usb && drive.empty()) return usage_error("give --usb-pty, --uf2-drive or both");
-  if (touch_to_enter && usb_link.empty()) return usage_error("--touch-to-enter needs --usb-pty=LINK, the name that comes back");
 
   hmc::emu::BareChip chip;
   if (!flash_in.empty()) {
@@ -95,69 +90,22 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  hmc::emu::SambaMonitor monitor(chip, say);
-  hmc::emu::UsbPty port;
-  std::string error;
-  if (usb) {
-    if (!port.open(usb_link, error)) {
-      say("error: " + error);
-      return 3;
-    }
-    say("usb pty " + port.path() + (usb_link.empty() ? "" : " (" + usb_link + ")") +
-        (touch_to_enter ? ": the application's port, waiting for a 1200-baud touch" : ""));
-  }
-  hmc::emu::Uf2Drive uf2(drive, chip, say);
-  if (!drive.empty()) {
-    if (!uf2.present(chip.nvm().flash(), error)) {
-      say("error: " + error);
-      return 3;
-    }
-    say("uf2 drive " + drive);
-  }
-
   signal(SIGINT, on_signal);
   signal(SIGTERM, on_signal);
   signal(SIGPIPE, SIG_IGN);
-  const char* why = "stopped by a signal";
-  bool in_application = touch_to_enter;
-  while (g_stop == 0) {
-    // The touch, as ArduinoCore-samd's USB serial port takes it: the application resets into the
-    // bootloader, whose USB port enumerates afresh (on Linux, usually under the same name).
-    if (in_application && port.touch_seen()) {
-      say("1200-baud touch seen: the USB port leaves and comes back as the bootloader's");
-      port.close();
-      ::usleep(500 * 1000);
-      if (!port.open(usb_link, error)) {
-        say("error: " + error);
-        return 3;
-      }
-      say("usb pty " + port.path() + " (" + usb_link + "): the bootloader's port");
-      in_application = false;
-    }
-    pollfd p{port.fd(), POLLIN, 0};
-    const int ready = ::poll(&p, usb ? 1 : 0, 100);
-    if (ready < 0 && errno != EINTR) {
-      say(std::string("error: poll: ") + std::strerror(errno));
-      return 3;
-    }
-    if (ready > 0 && (p.revents & POLLIN) != 0) {
-      uint8_t buffer[4096];
-      const ssize_t n = ::read(port.fd(), buffer, sizeof buffer);
-      if (n > 0 && !in_application && !port.send(monitor.receive(buffer, static_cast<size_t>(n))))
-        say("the host stopped reading the USB port; answer dropped");
-    }
-    for (const std::string& v : chip.take_violations()) say(v);
-    if (chip.reset_requested()) {
-      why = "reset (AIRCR SYSRESETREQ): the bootloader would start the application now";
-      break;
-    }
-    if (!drive.empty() && uf2.poll()) {
-      why = "UF2 file flashed: the bootloader would start the application now";
-      break;
-    }
+  hmc::emu::BootloaderPorts ports;
+  ports.usb = usb;
+  ports.usb_link = usb_link;
+  ports.uf2_drive = drive;
+  ports.touch_to_enter = touch_to_enter;
+  std::string error;
+  const hmc::emu::BootloaderEnd end = hmc::emu::run_bootloader(chip, ports, g_stop, say, error);
+  if (end == hmc::emu::BootloaderEnd::kError) {
+    say("error: " + error);
+    return 3;
   }
-  say(why);
-  port.close();
+  say(end == hmc::emu::BootloaderEnd::kStopped ? "stopped by a signal"
+                                               : "the application would start now (no CPU in this program)");
   if (!flash_out.empty()) {
     std::ofstream out(flash_out, std::ios::binary | std::ios::trunc);
     const auto& flash = chip.nvm().flash();

@@ -3,16 +3,11 @@
 
 #include <cstdio>
 
+#include "hex.h"
 #include "nvmctrl.h"
 
 namespace hmc::emu {
 namespace {
-
-std::string hex(uint32_t v) {
-  char text[16];
-  std::snprintf(text, sizeof text, "0x%08X", v);
-  return text;
-}
 
 // CRC-16/XMODEM, bit by bit: the checksum bossac compares the Z answer with.
 uint16_t crc16_add(uint16_t crc, uint8_t byte) {
@@ -35,9 +30,8 @@ void put_le(std::string& out, uint32_t v, unsigned size) {
 
 }  // namespace
 
-SambaMonitor::SambaMonitor(TargetBus& bus, std::function<void(const std::string&)> log,
-                           std::function<bool(uint32_t)> go)
-    : bus_(bus), flash_(bus), log_(std::move(log)), go_(std::move(go)) {}
+SambaMonitor::SambaMonitor(TargetBus& bus, std::function<void(const std::string&)> log)
+    : bus_(bus), flash_(bus), log_(std::move(log)) {}
 
 void SambaMonitor::fail(const std::string& what) {
   if (log_) log_(what);
@@ -118,7 +112,7 @@ void SambaMonitor::execute(char command, uint32_t address, uint32_t number, std:
       }
       return;
     case 'G':
-      if (!go_ || !go_(number)) fail("bootloader: G" + hex(number) + ": running code needs the emulated CPU");
+      fail("bootloader: G" + hex32(number) + ": running code needs the emulated CPU");
       return;
     case 'X':
       erase_from(number);
@@ -149,13 +143,13 @@ void SambaMonitor::execute(char command, uint32_t address, uint32_t number, std:
 
 void SambaMonitor::erase_from(uint32_t address) {
   if (address % Nvmctrl::kRowSize != 0) {
-    fail("bootloader: X" + hex(address) + ": not the start of a row");
+    fail("bootloader: X" + hex32(address) + ": not the start of a row");
     return;
   }
   std::string error;
   for (uint32_t row = address; row < Nvmctrl::kFlashSize; row += Nvmctrl::kRowSize) {
     if (!flash_.erase_row(row, error)) {
-      fail("bootloader: X" + hex(address) + ": " + error);
+      fail("bootloader: X" + hex32(address) + ": " + error);
       return;
     }
   }
@@ -163,7 +157,7 @@ void SambaMonitor::erase_from(uint32_t address) {
 
 void SambaMonitor::write_flash(uint32_t destination, uint32_t size) {
   if (destination % Nvmctrl::kPageSize != 0 || size % Nvmctrl::kPageSize != 0) {
-    fail("bootloader: Y" + hex(destination) + "," + hex(size) + ": not whole pages");
+    fail("bootloader: Y" + hex32(destination) + "," + hex32(size) + ": not whole pages");
     return;
   }
   std::string error;
@@ -172,7 +166,7 @@ void SambaMonitor::write_flash(uint32_t destination, uint32_t size) {
     for (uint32_t i = 0; i < Nvmctrl::kPageSize / 4; ++i)
       if (!read(source_buffer_ + done + 4 * i, 4, words[i])) return;
     if (!flash_.write_page(destination + done, words, error)) {
-      fail("bootloader: Y" + hex(destination) + "," + hex(size) + ": " + error);
+      fail("bootloader: Y" + hex32(destination) + "," + hex32(size) + ": " + error);
       return;
     }
   }

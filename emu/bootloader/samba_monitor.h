@@ -9,7 +9,8 @@
 //   WADDR,VALUE#  HADDR,VALUE#  OADDR,VALUE#   write one
 //   SADDR,LEN#      the next LEN bytes go to memory from ADDR (binary, USB mode)
 //   RADDR,LEN#      answers LEN bytes of memory from ADDR (binary, USB mode)
-//   GADDR#          run the code whose vector table is at ADDR (needs the CPU: see `go`)
+//   GADDR#          run the code whose vector table is at ADDR: refused (logged), the monitor
+//                   runs without the CPU; bossac sends it only without the extensions below
 //   XADDR#          erase the flash from ADDR to its end; answers "X\n\r"
 //   YADDR,0#        the source buffer for the next write is at ADDR; answers "Y\n\r"
 //   YADDR,LEN#      write LEN bytes from the source buffer to the flash at ADDR; answers "Y\n\r"
@@ -32,10 +33,8 @@ namespace hmc::emu {
 
 class SambaMonitor {
 public:
-  // `log` receives one line per refused or failed command; `go` runs code at an address and
-  // returns false when it cannot (no CPU attached). Either may be empty.
-  SambaMonitor(TargetBus& bus, std::function<void(const std::string&)> log,
-               std::function<bool(uint32_t)> go = {});
+  // `log` receives one line per refused or failed command; it may be empty.
+  SambaMonitor(TargetBus& bus, std::function<void(const std::string&)> log);
 
   // Takes bytes the host sent; returns the bytes the monitor answers with.
   std::string receive(const uint8_t* data, size_t size);
@@ -53,7 +52,6 @@ private:
   TargetBus& bus_;
   BootFlash flash_;
   std::function<void(const std::string&)> log_;
-  std::function<bool(uint32_t)> go_;
   char command_ = 0;
   uint32_t number_ = 0;
   uint32_t address_ = 0;

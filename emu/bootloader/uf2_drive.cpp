@@ -1,11 +1,11 @@
 // The UF2 drive as a directory (uf2_drive.h).
 #include "uf2_drive.h"
 
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 
+#include "hex.h"
 #include "nvmctrl.h"
 #include "uf2.h"
 
@@ -17,12 +17,6 @@ namespace fs = std::filesystem;
 uint32_t le32(const std::vector<uint8_t>& b, size_t at) {
   return static_cast<uint32_t>(b[at]) | static_cast<uint32_t>(b[at + 1]) << 8 |
          static_cast<uint32_t>(b[at + 2]) << 16 | static_cast<uint32_t>(b[at + 3]) << 24;
-}
-
-std::string hex(uint32_t v) {
-  char text[16];
-  std::snprintf(text, sizeof text, "0x%08X", v);
-  return text;
 }
 
 bool write_file(const fs::path& path, const std::vector<uint8_t>& bytes, std::string& error) {
@@ -74,11 +68,11 @@ size_t Uf2Drive::flash_file(const std::vector<uint8_t>& file, BootFlash& flash, 
     else if ((flags & 0x1) != 0)
       skip = "flag 'not main flash'";
     else if ((flags & uf2::kFlagFamilyIdPresent) != 0 && le32(file, at + 28) != uf2::kFamilySamd21)
-      skip = "family " + hex(le32(file, at + 28)) + ", not the SAMD21's";
+      skip = "family " + hex32(le32(file, at + 28)) + ", not the SAMD21's";
     else if (size != uf2::kPayloadSize || address % Nvmctrl::kRowSize != 0)
-      skip = "payload of " + std::to_string(size) + " bytes at " + hex(address) + " (256 at a row boundary expected)";
+      skip = "payload of " + std::to_string(size) + " bytes at " + hex32(address) + " (256 at a row boundary expected)";
     else if (address < kAppStart || address >= Nvmctrl::kFlashSize)
-      skip = "address " + hex(address) + " outside the application flash 0x00002000-0x0003FFFF";
+      skip = "address " + hex32(address) + " outside the application flash 0x00002000-0x0003FFFF";
     if (!skip.empty()) {
       if (log) log("uf2 drive: block " + std::to_string(n) + " skipped: " + skip);
       continue;

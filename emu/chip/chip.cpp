@@ -7,6 +7,7 @@
 
 #include "../board/board.h"
 #include "dmac.h"
+#include "nvmctrl.h"
 #include "port.h"
 #include "scs.h"
 #include "sercom.h"
@@ -36,7 +37,7 @@ Chip::Chip(const ChipOptions& options) : options_(options) {
   pm_ = std::make_unique<Pm>(*this);
   sysctrl_ = std::make_unique<Sysctrl>(*this);
   gclk_ = std::make_unique<Gclk>(*this);
-  nvmctrl_ = std::make_unique<NvmctrlMinimal>();
+  nvmctrl_ = std::make_unique<Nvmctrl>([this](const std::string& message) { violation(message); });
   wdt_ = std::make_unique<Wdt>(*this);
   scs_ = std::make_unique<Scs>(*this);
   port_ = std::make_unique<Port>(*this);

@@ -31,6 +31,7 @@ class Sercom;
 class Tc;
 class Tcc;
 class Dmac;
+class Nvmctrl;
 class Board;
 
 // Reads and writes of the chip's memory for bus masters other than the CPU (the DMAC).
@@ -126,6 +127,7 @@ class Chip {
   const Sysctrl& sysctrl() const { return *sysctrl_; }
   Scs& scs() { return *scs_; }
   Port& port() { return *port_; }
+  Nvmctrl& nvmctrl() { return *nvmctrl_; }
   Sercom& sercom(unsigned n) { return *sercoms_[n]; }
   Board& board() { return *board_; }
 
@@ -159,7 +161,7 @@ class Chip {
   std::unique_ptr<Pm> pm_;
   std::unique_ptr<Sysctrl> sysctrl_;
   std::unique_ptr<Gclk> gclk_;
-  std::unique_ptr<Peripheral> nvmctrl_;
+  std::unique_ptr<Nvmctrl> nvmctrl_;
   std::unique_ptr<Wdt> wdt_;
   std::unique_ptr<Scs> scs_;
   std::unique_ptr<Port> port_;

@@ -3,16 +3,11 @@
 #include "nvmctrl.h"
 
 #include <algorithm>
-#include <cstdio>
+
+#include "hex.h"
 
 namespace hmc::emu {
 namespace {
-
-std::string hex(uint32_t v) {
-  char text[16];
-  std::snprintf(text, sizeof text, "0x%08X", v);
-  return text;
-}
 
 bool in(uint32_t address, uint32_t base, uint32_t size) { return address >= base && address - base < size; }
 
@@ -28,7 +23,7 @@ constexpr uint32_t kUserRowWord1 = 0xFFFFFC5D;
 // USB TRIM 57:55, DFLL48M COARSE CAL 63:58, DFLL48M FINE CAL 73:64. Every part has its own
 // values; these are a guess in the range real parts report, chosen so that no field reads as
 // erased (COARSE 0x3F means "not calibrated" to the Arduino startup code).
-constexpr uint64_t kCalibrationLow = (uint64_t{0x1C} << 58) | (uint64_t{0x5} << 55) | (uint64_t{0x1D} << 50) |
+constexpr uint64_t kCalibrationLow = (uint64_t{0x1E} << 58) | (uint64_t{0x5} << 55) | (uint64_t{0x1D} << 50) |
                                      (uint64_t{0x05} << 45) | (uint64_t{0x40} << 38) | (uint64_t{0x7} << 35) |
                                      (uint64_t{0x3A} << 27);
 constexpr uint32_t kCalibrationFine = 0x200;
@@ -111,7 +106,7 @@ uint32_t Nvmctrl::read(uint32_t offset, unsigned size) {
     case kStatus: word = status_; break;
     case kAddr: word = addr_; break;
     case kLock: word = lock_; break;
-    default: report("read of reserved offset " + hex(offset)); return 0;
+    default: report("read of reserved offset " + hex32(offset)); return 0;
   }
   const uint32_t shift = 8 * (offset & 3u);
   const uint32_t mask = size >= 4 ? 0xFFFFFFFFu : (1u << (8 * size)) - 1;
@@ -165,7 +160,7 @@ void Nvmctrl::write(uint32_t offset, uint32_t value, unsigned size) {
       addr_ &= 0x3FFFFF;
       return;
     case kLock: report("write to LOCK: regions are locked and unlocked by the LR and UR commands"); return;
-    default: report("write to reserved offset " + hex(offset)); return;
+    default: report("write to reserved offset " + hex32(offset)); return;
   }
 }
 
@@ -184,19 +179,19 @@ uint32_t Nvmctrl::read_memory(uint32_t address, unsigned size) const {
   for (uint32_t i = 0; i < 4; ++i) put32(serial, 4 * i, kSerial[i]);
   if (in(address, kSerialWord0, 4)) return get(serial, address - kSerialWord0, size);
   if (in(address, kSerialWords123, 12)) return get(serial, 4 + address - kSerialWords123, size);
-  report("read outside the NVM at " + hex(address));
+  report("read outside the NVM at " + hex32(address));
   return 0;
 }
 
 void Nvmctrl::write_memory(uint32_t address, uint32_t value, unsigned size) {
   const bool main_array = in(address, 0, kFlashSize);
   if (!main_array && !in(address, kUserRow, kRowSize)) {
-    report("write to " + hex(address) + ", which is not the flash or the user row");
+    report("write to " + hex32(address) + ", which is not the flash or the user row");
     return;
   }
   // "8-bit writes to the page buffer are not allowed, and will cause a system exception."
   if (size == 1) {
-    report("8-bit write to the page buffer at " + hex(address) + " (only 16- and 32-bit writes are allowed)");
+    report("8-bit write to the page buffer at " + hex32(address) + " (only 16- and 32-bit writes are allowed)");
     return;
   }
   // "The page buffer is loaded by writing to the NVM main address space or auxiliary space ...
@@ -230,8 +225,8 @@ void Nvmctrl::execute(uint8_t command) {
     case kErase:
     case kWritePage:
       if (!in(byte_address, 0, kFlashSize)) {
-        report((command == kErase ? std::string("ER") : std::string("WP")) + " with ADDR " + hex(addr_) +
-               " (byte " + hex(byte_address) + ") outside the main array");
+        report((command == kErase ? std::string("ER") : std::string("WP")) + " with ADDR " + hex32(addr_) +
+               " (byte " + hex32(byte_address) + ") outside the main array");
         fail(kProgE);
         return;
       }
@@ -282,7 +277,7 @@ void Nvmctrl::execute(uint8_t command) {
     case kInvalidateCache: return;  // no cache contents are modelled
     case kSecurityFlow:
     case kWriteLockbits:
-      report("command " + hex(command) + " is for factory use and not modelled");
+      report("command " + hex32(command) + " is for factory use and not modelled");
       fail(kProgE);
       return;
     default: fail(kProgE); return;  // "an invalid command ... was written in CTRLA"

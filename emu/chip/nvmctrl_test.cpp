@@ -121,7 +121,7 @@ TEST_CASE_METHOD(Fixture, "the calibration row and serial number read as the fir
   const uint32_t high = nvm.read_memory(Nvmctrl::kSoftwareCalibration + 4, 4);
   const uint32_t coarse = high >> 26;
   CHECK(coarse != 0x3F);
-  CHECK(coarse == 0x1C);
+  CHECK(coarse == 0x1E);
   CHECK(nvm.read_memory(Nvmctrl::kSerialWord0, 4) != 0xFFFFFFFF);
   CHECK(Nvmctrl::in_nvm_space(Nvmctrl::kSerialWords123 + 8));
   CHECK_FALSE(Nvmctrl::in_nvm_space(0x40000));

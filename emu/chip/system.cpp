@@ -1,4 +1,4 @@
-// PM, SYSCTRL, GCLK, minimal NVMCTRL and WDT (system.h).
+// PM, SYSCTRL, GCLK and WDT (system.h).
 #include "system.h"
 
 #include <cstdio>
@@ -246,20 +246,6 @@ void Gclk::write(uint32_t offset, uint32_t value, unsigned size) {
     }
   }
   chip_.reschedule();
-}
-
-// ---- NVMCTRL (minimal) ----------------------------------------------------------------------
-// Datasheet 22.8: CTRLB 0x04 (RWS 4:1), PARAM 0x08 (NVMP 15:0 = 4096 pages, PSZ 18:16 = 3:
-// 64 bytes), INTFLAG 0x14 (READY 0).
-
-uint32_t NvmctrlMinimal::read(uint32_t offset, unsigned size) {
-  regs_.set(0x08, 4096u | (3u << 16), 4);
-  regs_.set(0x14, 1, 1);
-  return regs_.get(offset, size);
-}
-
-void NvmctrlMinimal::write(uint32_t offset, uint32_t value, unsigned size) {
-  if (touches(offset, size, 0x04, 4)) regs_.set(offset, value, size);
 }
 
 // ---- WDT ------------------------------------------------------------------------------------

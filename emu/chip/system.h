@@ -1,6 +1,6 @@
 // The SAMD21's system blocks: PM (bus clock masks, reset cause), SYSCTRL (oscillators, DFLL48M
-// and their ready flags), GCLK (generators and peripheral channels), a minimal NVMCTRL and the
-// WDT. Each rule cites the SAMD21 datasheet (DS40001882) section it follows.
+// and their ready flags), GCLK (generators and peripheral channels) and the WDT
+// (NVMCTRL is emu/chip/nvmctrl.h). Each rule cites the SAMD21 datasheet (DS40001882) section it follows.
 #pragma once
 
 #include <array>
@@ -79,19 +79,6 @@ class Gclk : public Peripheral {
   unsigned selected_channel_ = 0;
   unsigned selected_generator_ = 0;
   uint32_t gendiv_[kGenerators] = {};
-};
-
-// Minimal NVMCTRL: only what the image's start-up touches (CTRLB.RWS, PARAM, the READY flag).
-// The full model — page buffer, erase and write commands, the SAM-BA path — comes from the
-// bootloader work (emu/chip/nvmctrl.*); it replaces this block on the same Peripheral interface.
-class NvmctrlMinimal : public Peripheral {
- public:
-  uint32_t read(uint32_t offset, unsigned size) override;
-  void write(uint32_t offset, uint32_t value, unsigned size) override;
-  unsigned wait_states() const { return (regs_.get(0x04, 4) >> 1) & 0xF; }
-
- private:
-  RegisterBytes regs_{0x30};
 };
 
 class Wdt : public Peripheral, public Timed {

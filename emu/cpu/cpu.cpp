@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "../chip/nvmctrl.h"
 #include "../chip/scs.h"
 #include "cycles.h"
 
@@ -19,11 +20,6 @@ constexpr uint32_t kRamBase = 0x20000000, kRamSize = 32 * 1024;
 constexpr uint32_t kRegions[][2] = {{0x40000000, 0x10000}, {0x41000000, 0x10000},
                                     {0x42000000, 0x10000}, {0x60000000, 0x400},
                                     {0xE000E000, 0x1000}};
-// NVM software calibration row (datasheet 9.5, Table 9-4): DFLL48M COARSE CAL in bits 63:58,
-// word 0x00806024 bits 31:26. The value is a guess (each chip has its own): 0x1E, near the
-// middle of the range; the image falls back to 0x1F only for an erased row.
-constexpr uint32_t kDfllCoarseWord = 0x00806024;
-constexpr uint32_t kDfllCoarseGuess = 0x1E;
 // DDI0484C 3.3: 15 cycles from an interrupt to its handler's first instruction (zero wait
 // states). The return's cost is not in the manual: 13 cycles is a guess (the 8-word unstack).
 constexpr uint64_t kEntryCycles = 15, kReturnCycles = 13;
@@ -108,21 +104,25 @@ bool Cpu::init(std::string& error) {
       return false;
     }
   }
-  // Erased flash and rows read as ones (datasheet 22.6.4.1).
-  std::vector<uint8_t> erased(kFlashSize, 0xFF);
-  uc_mem_write(uc_, kFlashBase, erased.data(), kFlashSize);
-  uc_mem_write(uc_, kNvmRowsBase, erased.data(), kNvmRowsSize);
-  uint32_t calibration = 0x03FFFFFFu | (kDfllCoarseGuess << 26);
-  uc_mem_write(uc_, kDfllCoarseWord, &calibration, 4);
-
+  // The NVM's contents are NVMCTRL's (emu/chip/nvmctrl.h): the image goes into its flash, and
+  // the CPU reads the flash and the NVM rows (user row, software calibration) as it holds them;
+  // the rest of the rows' space reads as erased (ones).
+  Nvmctrl& nvm = chip_.nvmctrl();
   for (const Segment& s : image_.segments) {
-    if (s.address < kFlashBase || uint64_t{s.address} + s.bytes.size() > kFlashSize) {
+    if (s.address < kFlashBase || !nvm.load_flash(s.address, s.bytes)) {
       error = "the image has bytes at " + hex(s.address) + ", outside the SAMD21G18's 256 KB "
               "flash: linked for another chip or address";
       return false;
     }
-    uc_mem_write(uc_, s.address, s.bytes.data(), s.bytes.size());
   }
+  uc_mem_write(uc_, kFlashBase, nvm.flash().data(), kFlashSize);
+  std::vector<uint8_t> rows(kNvmRowsSize, 0xFF);
+  for (uint32_t base : {Nvmctrl::kUserRow, Nvmctrl::kCalibrationArea}) {
+    for (uint32_t i = 0; i < Nvmctrl::kRowSize; ++i) {
+      rows[base - kNvmRowsBase + i] = static_cast<uint8_t>(nvm.read_memory(base + i, 1));
+    }
+  }
+  uc_mem_write(uc_, kNvmRowsBase, rows.data(), kNvmRowsSize);
   chip_.set_memory(this);
 
   // One fixed exit address (never reached: it is not in the chip's memory map), set once:
@@ -193,17 +193,19 @@ void Cpu::on_block(uc_engine*, uint64_t address, uint32_t size, void* user) {
   Cpu& cpu = *static_cast<Cpu*>(user);
   Chip& chip = cpu.chip_;
   cpu.block_address_ = static_cast<uint32_t>(address);
-  chip.charge_cycles(cpu.block_cost(address, size));
   if (chip.reschedule_requested() && !chip.stopped()) {
     // A register write moved a peripheral's next event or the CPU clock: catch up and take the
     // new deadline without leaving the engine (no CPU state changes here).
     chip.advance();
     cpu.set_deadline();
   }
+  // A stop requested here takes effect before the block runs: the block is charged only when
+  // it runs.
   if (chip.stopped() || chip.cycles() >= cpu.deadline_cycles_) {
     uc_emu_stop(cpu.uc_);
     return;
   }
+  chip.charge_cycles(cpu.block_cost(address, size));
   if (chip.take_irq_dirty()) {
     const bool primask = (cpu.reg(UC_ARM_REG_PRIMASK) & 1) != 0;
     if (chip.scs().ready_exception(primask) != 0) {
@@ -340,8 +342,24 @@ void Cpu::set_deadline() {
   deadline_cycles_ = chip_.cycles_at(ps);
 }
 
+// When the engine is stopped while an EXC_RETURN branch is in flight, it completes the return
+// itself at the next start (its own M-profile unstacking) without the interrupt hook: the
+// bookkeeping then follows IPSR, which names the exception still running (0: none).
+void Cpu::sync_active() {
+  const unsigned ipsr = reg(UC_ARM_REG_IPSR) & 0x3F;
+  while (!active_.empty() && active_.back().exception != ipsr) {
+      const Active done = active_.back();
+    active_.pop_back();
+    HandlerFigures& figures = handler_figures_[done.exception];
+    ++figures.count;
+    figures.cycles += chip_.cycles() - done.entered_cycles + kEntryCycles + kReturnCycles;
+    chip_.scs().complete(done.exception);
+  }
+}
+
 void Cpu::run_until(uint64_t until_ps) {
   while (!chip_.stopped() && chip_.now_ps() < until_ps) {
+    sync_active();
     chip_.advance();
     if (chip_.stopped()) break;
     const bool primask = (reg(UC_ARM_REG_PRIMASK) & 1) != 0;

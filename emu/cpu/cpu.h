@@ -66,6 +66,7 @@ class Cpu : public Memory {
 
   void enter_exception(unsigned exception);
   void return_from_exception();
+  void sync_active();
   uint32_t reg(int id) const;
   void set_reg(int id, uint32_t value);
   uint32_t block_cost(uint64_t address, uint32_t size);
