@@ -59,7 +59,7 @@ void ServoPwm::set_pulse(uint8_t servo, uint16_t pulse_us) {
   // Not driving the pin yet: set the compare directly, then hand the pin to TCC0.
   r32(kTcc + tcc::cc(channel)) = counts;
   sync(tcc::sync_cc(channel));
-  pin_function(board::servo::kPins[index], board::servo::kFunction);
+  pin_function(board::servo::kPins[index], board::servo::kFunctions[index]);
   running_[index] = true;
 }
 
