@@ -48,7 +48,8 @@ Controller::Controller(const Board& board, const ControllerOptions& options)
   }
 }
 
-void Controller::boot() {
+void Controller::boot(const ResetReport& reset) {
+  reset_ = reset;
   for (uint8_t motor = 1; motor <= proto::kMotorCount; ++motor) {
     const Motor& mo = motors_[index(motor)];
     drv8711::Drv8711& driver = drivers_[index(motor)];
@@ -73,6 +74,7 @@ void Controller::boot() {
   driver_check_at_ = now + ms_to_ticks(kDriverCheckMs);
   const uint32_t booted[] = {proto::kProtocolVersion, proto::kFirmwareVersion};
   send(BoardFrameId::kBooted, booted);
+  send_reset(BoardFrameId::kResetEvent);
   check_switches();
 
   if (options_.self_test && !emergency_) start_self_test();
@@ -230,7 +232,22 @@ void Controller::answer_version() {
   send(BoardFrameId::kVersion, values);
 }
 
+void Controller::send_reset(BoardFrameId id) {
+  // Clamped to the fields' ranges: a record read back from RAM after a fault is only as good
+  // as the RAM was.
+  auto exception_number = [](uint32_t n) { return n <= proto::kMaxException ? n : 0u; };
+  const uint32_t cause = static_cast<uint32_t>(reset_.cause);
+  const uint32_t values[] = {cause < proto::kResetCauseCount ? cause : 0u, exception_number(reset_.exception),
+                             reset_.pc & proto::kIntMax, reset_.lr & proto::kIntMax,
+                             exception_number(reset_.context)};
+  send(id, values);
+}
+
 void Controller::answer_status(uint8_t unit) {
+  if (unit == proto::kUnitReset) {
+    send_reset(BoardFrameId::kResetStatus);
+    return;
+  }
   if (unit >= proto::kUnitFirstStrip) {
     const uint8_t* c = strips_[unit - proto::kUnitFirstStrip];
     const uint32_t values[] = {static_cast<uint32_t>(unit - proto::kUnitFirstStrip + 1), c[0], c[1], c[2], c[3]};

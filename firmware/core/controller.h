@@ -18,8 +18,8 @@
 //    sum of the commanded rates above it is refused, as is a delay the timer cannot count.
 //  - Every refused line sounds the warning tone. With Options::replies every line is answered
 //    in order (reply_writer.h): ACK, NAK with the reason, token and offset, or the answer to a
-//    query (VER, STA → STA/STB/STL, GET → SET); events (EVB, EVD, EVH, EVL, EVE, EVF) are sent
-//    as things happen. Without replies the board is silent, as the seed is.
+//    query (VER, STA → STA/STB/STL/STR, GET → SET); events (EVB and EVR at boot, EVD, EVH, EVL,
+//    EVE, EVF) are sent as things happen. Without replies the board is silent, as the seed is.
 //  - Protocol v2 settings per motor (SET/GET, proto::kSettings): current, decay, acceleration,
 //    max rate, homing end, seek rate, pull-off and slow locate; soft limits (LIM); the checksum
 //    mode (CRC), switched after its own ACK.
@@ -49,6 +49,16 @@ struct Board {
   hal::Buzzer& buzzer;
   hal::BootLeds& boot_leds;
   hal::SerialPort& serial;
+};
+
+// Why the board last reset and, after a fault, where (EVR and STR, proto::kResetFields): the
+// port reads it from the chip before boot().
+struct ResetReport {
+  proto::ResetCause cause = proto::ResetCause::kUnknown;
+  uint32_t exception = 0;  // the exception that caught a fault (3 HardFault, 16 + n interrupt n)
+  uint32_t pc = 0;         // the faulting instruction
+  uint32_t lr = 0;         // the link register then, bit 31 dropped
+  uint32_t context = 0;    // what ran then: 0 the main loop, else its exception number
 };
 
 struct ControllerOptions {
@@ -101,8 +111,8 @@ class Controller {
   Controller(const Board& board, const ControllerOptions& options);
 
   // Main loop, once: drivers set up and enabled, LEDs off, servos centred, boot tune, booting
-  // LEDs, self-test.
-  void boot();
+  // LEDs, the boot events (EVB, then EVR with `reset`), self-test.
+  void boot(const ResetReport& reset);
   // Main loop, as often as possible: serial bytes, lines, timers, ended motions, switches.
   void poll();
   // The step timer's interrupt.
@@ -166,6 +176,7 @@ class Controller {
   Refusal limits(const LimitsCommand& command);
   void answer_version();
   void answer_status(uint8_t unit);
+  void send_reset(proto::BoardFrameId id);  // EVR or STR
   void check_switches();
   void check_drivers(hal::Ticks now);
   void run_timers(hal::Ticks now);
@@ -203,6 +214,7 @@ class Controller {
   uint8_t strips_[proto::kStripCount][4];            // r, g, b, w
   hal::Ticks driver_check_at_;
   proto::ChecksumMode next_mode_;                    // CRC: applied after the line's reply
+  ResetReport reset_;
   hal::Ticks boot_led_at_;
   bool boot_led_left_;
   const Note* tune_;

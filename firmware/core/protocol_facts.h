@@ -217,9 +217,10 @@ static_assert(kSettingHomeLocate == kSettingCount, "one SettingId per kSettings 
 // STA's units.
 inline constexpr uint32_t kUnitBoard = 4;        // switches, emergency, servos
 inline constexpr uint32_t kUnitFirstStrip = 5;   // 5 and 6: LED strips 1 and 2
+inline constexpr uint32_t kUnitReset = kUnitFirstStrip + kStripCount;  // 7: why the board last reset (protocol 4)
 
 inline constexpr FieldSpec kStatusFields[] = {
-    {"unit", 1, kUnitFirstStrip + kStripCount - 1, 0, 0, 0, "1-3 a motor, 4 the board, 5-6 LED strip 1-2"},
+    {"unit", 1, kUnitReset, 0, 0, 0, "1-3 a motor, 4 the board, 5-6 LED strip 1-2, 7 the last reset (protocol 4)"},
 };
 inline constexpr FieldSpec kSetFields[] = {
     {"motor", 1, kMotorCount, 0, 0, 0, "stepper 1-3"},
@@ -269,8 +270,52 @@ static_assert(commands_indexed_by_id(), "kCommands[i] must describe CommandId i"
 // Board -> host frames (protocol v2, docs/protocol.md "Replies" and "Protocol v2"). One reply
 // per non-blank line received; events (names starting with 'E') come unprompted between them.
 
-inline constexpr uint32_t kProtocolVersion = 2;
+inline constexpr uint32_t kProtocolVersion = 4;
 inline constexpr uint32_t kFirmwareVersion = 100;  // major·10000 + minor·100 + patch: 0.1.0
+
+// ---------------------------------------------------------------------------------------
+// Features and the first protocol version that has each (docs/protocol.md "Versions"). The host
+// asks VER and checks a feature here before relying on it; a board older than that is told
+// "the board's firmware is too old for this: reflash", never met with a frame it cannot decode.
+
+enum class Feature : uint8_t {
+  kResetCause,  // EVR after EVB at boot, STA 7 answered with STR
+};
+struct FeatureSpec {
+  Feature feature;
+  uint32_t since;     // the first protocol version that has it
+  const char* name;   // stable identifier
+  const char* text;   // what it is, for people
+};
+inline constexpr FeatureSpec kFeatures[] = {
+    {Feature::kResetCause, 4, "reset_cause", "the reset cause and fault record (EVR, STA 7)"},
+};
+inline constexpr uint32_t kFeatureCount = sizeof(kFeatures) / sizeof(kFeatures[0]);
+constexpr const FeatureSpec& feature_spec(Feature f) { return kFeatures[static_cast<uint8_t>(f)]; }
+constexpr bool features_indexed_by_id() {
+  for (uint32_t i = 0; i < kFeatureCount; ++i) {
+    if (static_cast<uint32_t>(kFeatures[i].feature) != i || kFeatures[i].since > kProtocolVersion) return false;
+  }
+  return true;
+}
+static_assert(features_indexed_by_id(), "kFeatures[i] describes Feature i, no later than this protocol");
+
+// Why the board last reset (EVR, STR). The SAMD21 reads it from PM RCAUSE; kFault is a system
+// reset its fault handler requested after recording where the fault happened.
+enum class ResetCause : uint8_t {
+  kUnknown = 0,   // no cause recorded (e.g. a board that cannot tell)
+  kPowerOn = 1,
+  kBrownOut = 2,  // supply dipped below the brown-out detector's level
+  kExternal = 3,  // the reset pin
+  kWatchdog = 4,  // the main loop stopped kicking the watchdog
+  kSoftware = 5,  // a system reset request (a bootloader, bossac -R, the firmware itself)
+  kFault = 6,     // a CPU fault or an interrupt without a handler: exception, pc, lr say where
+};
+inline constexpr const char* kResetCauseNames[] = {"unknown",  "power_on", "brown_out", "external",
+                                                   "watchdog", "software", "fault"};
+inline constexpr uint32_t kResetCauseCount = sizeof(kResetCauseNames) / sizeof(kResetCauseNames[0]);
+// Exception numbers (ARMv6-M): 2 NMI, 3 HardFault, 16 + n peripheral interrupt n (SAMD21: 28).
+inline constexpr uint32_t kMaxException = 16 + 28 - 1;
 
 enum class BoardFrameId : uint8_t {
   kAck,
@@ -286,6 +331,8 @@ enum class BoardFrameId : uint8_t {
   kLimitChanged,
   kEmergencyChanged,
   kDriverFault,
+  kResetStatus,  // protocol 4
+  kResetEvent,   // protocol 4
 };
 
 struct BoardFrameSpec {
@@ -350,6 +397,18 @@ inline constexpr FieldSpec kBootedFields[] = {
     {"protocol", 1, 255, 0, 0, 0, "protocol version"},
     {"firmware", 0, kIntMax, 0, 0, 0, "major*10000 + minor*100 + patch"},
 };
+// EVR (after EVB at boot) and STR (the answer to STA 7): why the board last reset. The fault
+// fields are 0 unless cause is fault. Addresses travel as decimal numbers up to INT_MAX: `lr`
+// drops bit 31, which only the exception-return values 0xFFFFFFF1/9/D have on this chip.
+inline constexpr FieldSpec kResetFields[] = {
+    {"cause", 0, kResetCauseCount - 1, 0, 0, 0,
+     "0 unknown, 1 power-on, 2 brown-out, 3 reset pin, 4 watchdog, 5 software, 6 fault"},
+    {"exception", 0, kMaxException, 0, 0, 0, "fault: the exception that caught it (3 HardFault, 16+n interrupt n)"},
+    {"pc", 0, kIntMax, 0, 0, 0, "fault: the address of the faulting instruction"},
+    {"lr", 0, kIntMax, 0, 0, 0, "fault: the link register then (bit 31 dropped)"},
+    {"context", 0, kMaxException, 0, 0, 0, "fault: what ran then (0 the main loop, else its exception number)"},
+};
+
 inline constexpr FieldSpec kLimitChangedFields[] = {
     {"motor", 1, kMotorCount, 0, 0, 0, "motor with switches"},
     {"end", 0, 1, 0, 0, 0, "0 toward reverse, 1 toward forward"},
@@ -377,6 +436,8 @@ inline constexpr BoardFrameSpec kBoardFrames[] = {
     {"EVL", BoardFrameId::kLimitChanged, 3, kLimitChangedFields, "event: a limit switch changed"},
     {"EVE", BoardFrameId::kEmergencyChanged, 1, kEmergencyChangedFields, "event: the emergency switch changed"},
     {"EVF", BoardFrameId::kDriverFault, 2, kDriverFaultFields, "event: a driver fault"},
+    {"STR", BoardFrameId::kResetStatus, 5, kResetFields, "reply to STA 7 (protocol 4)"},
+    {"EVR", BoardFrameId::kResetEvent, 5, kResetFields, "event: why the board reset, after EVB (protocol 4)"},
 };
 inline constexpr uint32_t kBoardFrameCount = sizeof(kBoardFrames) / sizeof(kBoardFrames[0]);
 

@@ -191,6 +191,21 @@ std::string Session::description() const {
 
 uint32_t Session::max_rate() const { return version_ ? version_->max_rate : 50000; }
 
+bool Session::supports(proto::Feature feature) const {
+  return firmware_ == Firmware::kV2 && version_ && version_->protocol >= proto::feature_spec(feature).since;
+}
+
+SessionResult<Done> Session::require(proto::Feature feature) const {
+  if (supports(feature)) return Done{};
+  const proto::FeatureSpec& spec = proto::feature_spec(feature);
+  const std::string board = firmware_ == Firmware::kSeed ? std::string("the seed firmware")
+                            : version_                   ? "protocol " + std::to_string(version_->protocol)
+                                                         : std::string("an unknown protocol");
+  return make_error(SessionError::Kind::kRefused,
+                    "the board's firmware is too old for this: reflash (" + std::string(spec.text) + " needs protocol " +
+                        std::to_string(spec.since) + "; the board runs " + board + ")");
+}
+
 bool Session::legacy_rules() const { return firmware_ == Firmware::kSeed || (version_ && version_->legacy); }
 
 SessionResult<Done> Session::write_line(const std::string& line, std::optional<Command> command) {
@@ -288,6 +303,8 @@ SessionResult<Done> Session::check(const Command& command) const {
     return make_error(SessionError::Kind::kRefused,
                       std::string(command_spec(command).name) + " is a protocol v2 command: the seed firmware does not know it",
                       Reason::kUnknownCommand);
+  } else if (const auto* query = std::get_if<StatusQuery>(&command); query && query->unit == proto::kUnitReset) {
+    if (SessionResult<Done> ok = require(proto::Feature::kResetCause); !ok) return ok;
   }
   return Done{};
 }
@@ -331,6 +348,10 @@ SessionResult<Done> Session::refresh() {
   if (firmware_ == Firmware::kSeed) return Done{};
   for (uint32_t unit = 1; unit <= proto::kUnitFirstStrip + proto::kStripCount - 1; ++unit) {
     SessionResult<BoardFrame> reply = execute(StatusQuery{unit});
+    if (!reply) return reply.error();
+  }
+  if (supports(proto::Feature::kResetCause)) {
+    SessionResult<BoardFrame> reply = execute(StatusQuery{proto::kUnitReset});
     if (!reply) return reply.error();
   }
   model_.reported = true;
@@ -556,6 +577,8 @@ void Session::apply(const BoardFrame& frame) {
     }
     void operator()(const EmergencyChanged& e) const { s.model_.board.emergency = e.pressed; }
     void operator()(const DriverFault&) const {}
+    void operator()(const ResetStatus& r) const { s.model_.last_reset = r; }
+    void operator()(const ResetEvent& r) const { s.model_.last_reset = r; }
   };
   std::visit(Apply{*this}, frame);
 }

@@ -222,20 +222,34 @@ constexpr PinName pin_name(Pin p) {
            static_cast<char>('0' + p.number % 10), '\0'}};
 }
 
-// The text the image carries so `hmc flash` can name the variant and its unverified pins:
-// "hmc-board:<name>;guessed:PA05,PA06,...;" and zeros after it.
+// The text the image carries so `hmc flash` can name the variant, the protocol and firmware
+// versions to expect from the board, and the unverified pins:
+// "hmc-board:<name>;protocol:<n>;firmware:<n>;guessed:PA05,PA06,...;" and zeros after it.
 inline constexpr char kInfoMarker[] = "hmc-board:";
 struct InfoText {
   char text[256];
 };
-constexpr InfoText info_text(const BoardVariant& v) {
+constexpr InfoText info_text(const BoardVariant& v, uint32_t protocol, uint32_t firmware) {
   InfoText out{};
   uint32_t at = 0;
   auto put = [&out, &at](const char* s) {
     while (*s != '\0' && at + 1 < sizeof(out.text)) out.text[at++] = *s++;
   };
+  auto put_number = [&put](uint32_t n) {
+    char digits[11] = {};
+    int i = 10;
+    do {
+      digits[--i] = static_cast<char>('0' + n % 10);
+      n /= 10;
+    } while (n != 0);
+    put(digits + i);
+  };
   put(kInfoMarker);
   put(v.name);
+  put(";protocol:");
+  put_number(protocol);
+  put(";firmware:");
+  put_number(firmware);
   put(";guessed:");
   bool first = true;
   for (uint32_t i = 0; i < v.count; ++i) {

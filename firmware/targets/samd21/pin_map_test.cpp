@@ -168,8 +168,8 @@ TEST_CASE("a broken table is refused, naming what is wrong") {
 }
 
 TEST_CASE("the image's board info names the variant and every guessed pin") {
-  const std::string seed = info_text(boards::kSeed).text;
-  CHECK(seed.rfind("hmc-board:seed;guessed:", 0) == 0);
+  const std::string seed = info_text(boards::kSeed, 4, 100).text;
+  CHECK(seed.rfind("hmc-board:seed;protocol:4;firmware:100;guessed:PA05,PA06,", 0) == 0);
   CHECK(seed.back() == ';');
   uint32_t guessed = 0;
   for (uint32_t i = 0; i < boards::kSeed.count; ++i) {
@@ -180,7 +180,7 @@ TEST_CASE("the image's board info names the variant and every guessed pin") {
     guessed += boards::kSeed.pins[i].evidence == Evidence::kGuessed ? 1u : 0u;
   }
   CHECK(guessed == 19);
-  CHECK(std::string(info_text(boards::kBench).text).rfind("hmc-board:bench;guessed:PA05,", 0) == 0);
+  CHECK(std::string(info_text(boards::kBench, 2, 10203).text).rfind("hmc-board:bench;protocol:2;firmware:10203;guessed:PA05,", 0) == 0);
 }
 
 TEST_CASE("docs/firmware.md's pin map is the seed variant's table") {

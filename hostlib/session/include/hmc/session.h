@@ -74,6 +74,9 @@ struct BoardModel {
   bool reported = false;
   // How each motor's last motion ended (v2: from EVD), until the next one starts.
   std::array<std::optional<MotionEnd>, proto::kMotorCount> last_end{};
+  // Why the board last reset (protocol 4: STR when the session opened, EVR when it reboots);
+  // nothing from a board that predates it.
+  std::optional<ResetInfo> last_reset;
 
   BoardModel();
   const MotorStatus& motor(uint32_t m) const { return motors[m - 1]; }
@@ -109,6 +112,11 @@ class Session {
   // The rate budget of the board in steps/s (VER; the seed's figure is unknown, ours is used).
   uint32_t max_rate() const;
   bool legacy_rules() const;
+  // Whether the board's protocol (VER) has a feature (proto::kFeatures); the seed firmware has
+  // none. require() is the same as an error to return: "the board's firmware is too old for
+  // this: reflash", naming the feature and both versions.
+  bool supports(proto::Feature feature) const;
+  SessionResult<Done> require(proto::Feature feature) const;
 
   // Checks a command against the protocol and the model without sending it.
   SessionResult<Done> check(const Command& command) const;
