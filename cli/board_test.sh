@@ -195,7 +195,7 @@ if port=$(tcp_port tcp) && cport=$(control_port tcp); then
   # Protocol 4: why the board last reset (hmc-sim: power-on), in words and in JSON.
   expect status-last-reset 0 '^last reset: power-on$' -- "$hmc" -p "$board" status
   expect status-last-reset-json 0 '"last_reset": \{' -- "$hmc" -p "$board" status --json
-  expect send-reset-query 0 '^STR \(reply\): last reset: power-on$' -- "$hmc" -p "$board" send STA 7
+  expect send-reset-query 0 '^STR \(reply\): last reset: power-on$' -- "$hmc" -p "$board" send STA 8
   expect monitor-last-reset 0 "^the board's last reset: power-on$" -- "$hmc" -p "$board" monitor --duration 0.2
 
   # move --wait prints where the motor stopped; status agrees (JSON positions in 1/256 step).

@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "exit_codes.h"
+#include "profile_choice.h"
 #include "hmc/command_json.h"
 #include "hmc/port_list.h"
 #include "hmc/transport.h"
@@ -25,6 +26,7 @@ void catch_interrupts() {
   sigemptyset(&action.sa_mask);
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
+  sigaction(SIGHUP, &action, nullptr);  // a closed terminal or a dropped SSH session
   signal(SIGPIPE, SIG_IGN);  // a closed connection is an error from write, not a signal
 }
 
@@ -36,6 +38,7 @@ const char* kind_name(SessionError::Kind kind) {
     case SessionError::Kind::kNoReply: return "no_reply";
     case SessionError::Kind::kLink: return "link";
     case SessionError::Kind::kInterrupted: return "interrupted";
+    case SessionError::Kind::kTooOld: return "firmware_too_old";
   }
   return "link";
 }
@@ -44,7 +47,8 @@ int exit_code_of(SessionError::Kind kind) {
   switch (kind) {
     case SessionError::Kind::kInvalid:
     case SessionError::Kind::kRefused:
-    case SessionError::Kind::kNak: return kExitInvalid;
+    case SessionError::Kind::kNak:
+    case SessionError::Kind::kTooOld: return kExitInvalid;
     case SessionError::Kind::kNoReply: return kExitNoReply;
     case SessionError::Kind::kLink: return kExitIo;
     case SessionError::Kind::kInterrupted: return kExitInterrupted;
@@ -72,21 +76,46 @@ Result<std::string> default_port(bool quiet) {
 }  // namespace
 
 void add_global_options(CLI::App& app, GlobalOptions& o) {
-  app.add_option("-p,--port", o.port,
+  o.port_option = app.add_option("-p,--port", o.port,
                  "the board: /dev/ttyUSB0, tcp://HOST:PORT, a pseudo-terminal, or sim:// for the simulated board "
                  "(default: the one FT232R bridge found)")
       ->envname("HMC_PORT");
-  app.add_option("--baud", o.baud, "serial baud rate (default 115200)")->check(CLI::Range(300u, 4000000u));
+  o.baud_option = app.add_option("--baud", o.baud, "serial baud rate (default 115200)")->check(CLI::Range(300u, 4000000u));
   app.add_option("--timeout", o.timeout_ms, "ms to wait for each reply (default 1000)")->check(CLI::Range(10, 600000));
   app.add_flag("--json", o.json, "machine-readable output (docs/cli.md)");
   app.add_flag("-v,--verbose", o.verbose, "show every line sent (>) and received (<) on standard error");
-  app.add_option("--firmware", o.firmware, "auto (ask VER), v2, or seed (a board that answers nothing)")
+  app.add_option("--watchdog", o.watchdog_ms,
+                 "ms without a line after which the board brakes every motor, armed by run, stream, move --wait, "
+                 "home and monitor (default 500; 0: none)")
+      ->check(CLI::Range(0, static_cast<int>(proto::kWatchdogMaxMs)));
+  o.firmware_option = app.add_option("--firmware", o.firmware, "auto (ask VER), v2, or seed (a board that answers nothing)")
       ->check(CLI::IsMember({"auto", "v2", "seed"}));
+  app.add_option("--profile", o.profile,
+                 "the machine profile: axes by name, units, port (default: HMC_PROFILE, else "
+                 "$XDG_CONFIG_HOME/hmc/config.toml when it exists; docs/config.md)");
 }
 
 bool interrupt_requested() { return g_interrupted != 0; }
 
-std::unique_ptr<Session> connect(const GlobalOptions& o, int& exit_code, LineHandler on_line) {
+SessionResult<Done> watch_link(Session& s, const GlobalOptions& o) {
+  if (o.watchdog_ms == 0) return Done{};
+  if (SessionResult<Done> able = s.require(proto::Feature::kLinkWatchdog); !able) {
+    if (!o.json) {
+      std::cerr << "note: no link watchdog: " << able.error().message
+                << "; if hmc dies, running motors keep running\n";
+    }
+    return Done{};
+  }
+  return s.arm_watchdog(Millis{o.watchdog_ms});
+}
+
+std::unique_ptr<Session> connect(const GlobalOptions& given, int& exit_code, LineHandler on_line) {
+  Result<GlobalOptions, int> profiled = with_profile_link(given);
+  if (!profiled) {
+    exit_code = profiled.error();
+    return nullptr;
+  }
+  const GlobalOptions& o = *profiled;
   std::string name = o.port;
   if (name.empty()) {
     Result<std::string> found = default_port(o.json);
@@ -164,6 +193,7 @@ nlohmann::json model_to_json(const Session& s) {
   j["version"] = s.version() ? board_frame_to_json(BoardFrame{*s.version()}) : nlohmann::json(nullptr);
   j["reported"] = model.reported;
   j["emergency"] = model.board.emergency;
+  j["watchdog"] = model.watchdog ? board_frame_to_json(BoardFrame{*model.watchdog}) : nlohmann::json(nullptr);
   j["motors"] = nlohmann::json::array();
   for (uint32_t m = 1; m <= proto::kMotorCount; ++m) j["motors"].push_back(motor_to_json(model.motor(m), model.last_end[m - 1]));
   j["servos"] = {{{"servo", 1}, {"pulse_us", model.board.servo1_us}}, {{"servo", 2}, {"pulse_us", model.board.servo2_us}}};

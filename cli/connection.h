@@ -1,5 +1,5 @@
 // What every board command shares: the global options (--port, --baud, --timeout, --json, -v,
-// --firmware), finding the port, opening the session, Ctrl-C, and turning a session's errors into
+// --firmware, --profile), finding the port, opening the session, Ctrl-C, and turning a session's errors into
 // messages and exit codes (docs/cli.md).
 #pragma once
 
@@ -21,6 +21,12 @@ struct GlobalOptions {
   bool json = false;       // --json
   int verbose = 0;         // -v: every line sent and received, on standard error
   std::string firmware = "auto";  // --firmware auto|v2|seed
+  int watchdog_ms = 500;   // --watchdog: the link watchdog long-lived commands arm; 0 none
+  std::string profile;     // --profile (HMC_PROFILE read where the profile is chosen: profile_choice.h)
+  // The options as parsed: a value the command line (or HMC_PORT) did not give comes from the profile.
+  const CLI::Option* port_option = nullptr;
+  const CLI::Option* baud_option = nullptr;
+  const CLI::Option* firmware_option = nullptr;
 };
 
 // Adds the global options to the top-level app (they may also follow a subcommand).
@@ -33,7 +39,13 @@ using LineHandler = std::function<void(std::string_view line, const Result<Board
 // with `exit_code` set.
 std::unique_ptr<Session> connect(const GlobalOptions& options, int& exit_code, LineHandler on_line = nullptr);
 
-// Raised by SIGINT; a session's waits poll it.
+// For commands that keep the board busy (run, stream, move --wait, home, monitor): arms the
+// board's link watchdog (--watchdog), so the motors brake if this process dies without a word;
+// the session keeps the link alive and disarms it when it ends. A board without one (seed
+// firmware, protocol 2) gets a note on standard error and the command goes on.
+SessionResult<Done> watch_link(Session& session, const GlobalOptions& options);
+
+// Raised by SIGINT, SIGTERM and SIGHUP; a session's waits poll it.
 bool interrupt_requested();
 
 // Prints a session error (as {"error": {...}} with --json) and returns its exit code.

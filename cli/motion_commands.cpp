@@ -345,6 +345,10 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
                                                proto::Reason::kOk});
       return;
     }
+    if (SessionResult<Done> watched = watch_link(*session, g); !watched) {
+      exit_code = report_error(g, watched.error());
+      return;
+    }
     Progress progress(g.json);
     motion::RunOptions run_options;
     run_options.from = o->from;

@@ -31,6 +31,9 @@ Controller::Controller(const Board& board, const ControllerOptions& options)
       servo_pulse_{},
       strips_{},
       driver_check_at_(0),
+      watchdog_ms_(0),
+      watchdog_at_(0),
+      watchdog_fired_(false),
       next_mode_(proto::ChecksumMode::kSum),
       boot_led_at_(0),
       boot_led_left_(true),
@@ -83,12 +86,34 @@ void Controller::boot(const ResetReport& reset) {
 void Controller::poll() {
   check_switches();
   for (int byte = board_.serial.read_byte(); byte >= 0; byte = board_.serial.read_byte()) {
+    // Every line end feeds the watchdog, a blank line's too: a bare LF is the host's keep-alive,
+    // which needs no reply.
+    if (watchdog_ms_ != 0 && (byte == '\r' || byte == '\n')) {
+      watchdog_at_ = board_.timer.now() + ms_to_ticks(watchdog_ms_);
+    }
     if (parser_.feed(static_cast<uint8_t>(byte))) handle_line(parser_.verdict());
   }
   check_motions();
   const hal::Ticks now = board_.timer.now();
+  check_watchdog(now);
   check_drivers(now);
   run_timers(now);
+}
+
+// The host went silent: brake every motor (a stop, with each motor's acceleration), report
+// each end as the watchdog's, and disarm, so a later host decides whether to arm it again.
+void Controller::check_watchdog(hal::Ticks now) {
+  if (watchdog_ms_ == 0 || now < watchdog_at_) return;
+  watchdog_ms_ = 0;
+  watchdog_fired_ = true;
+  abort_self_test();
+  for (uint8_t motor = 1; motor <= proto::kMotorCount; ++motor) {
+    Motor& mo = motors_[index(motor)];
+    if (!scheduler_.is_running(motor) && mo.state == MotorState::kIdle) continue;
+    if (mo.state == MotorState::kHoming) mo.state = MotorState::kMoving;  // no next phase
+    mo.halt_cause = proto::kEndWatchdog;
+    stop_motor(motor);
+  }
 }
 
 void Controller::on_switch_change() {
@@ -170,6 +195,11 @@ Controller::Refusal Controller::execute(const Command& command) {
     case proto::CommandId::kChecksumMode:
       next_mode_ = static_cast<proto::ChecksumMode>(command.checksum_mode.mode);
       return {};
+    case proto::CommandId::kWatchdog:
+      watchdog_ms_ = command.watchdog.timeout_ms;
+      watchdog_at_ = board_.timer.now() + ms_to_ticks(watchdog_ms_);
+      if (watchdog_ms_ != 0) watchdog_fired_ = false;
+      return {};
   }
   return {Reason::kUnknownCommand, proto::kTokenName};
 }
@@ -244,6 +274,11 @@ void Controller::send_reset(BoardFrameId id) {
 }
 
 void Controller::answer_status(uint8_t unit) {
+  if (unit == proto::kUnitWatchdog) {
+    const uint32_t values[] = {watchdog_ms_, watchdog_fired_ ? 1u : 0u};
+    send(BoardFrameId::kWatchdogStatus, values);
+    return;
+  }
   if (unit == proto::kUnitReset) {
     send_reset(BoardFrameId::kResetStatus);
     return;

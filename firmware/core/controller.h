@@ -18,8 +18,12 @@
 //    sum of the commanded rates above it is refused, as is a delay the timer cannot count.
 //  - Every refused line sounds the warning tone. With Options::replies every line is answered
 //    in order (reply_writer.h): ACK, NAK with the reason, token and offset, or the answer to a
-//    query (VER, STA → STA/STB/STL/STR, GET → SET); events (EVB and EVR at boot, EVD, EVH, EVL,
-//    EVE, EVF) are sent as things happen. Without replies the board is silent, as the seed is.
+//    query (VER, STA → STA/STB/STL/STW/STR, GET → SET); events (EVB and EVR at boot, EVD, EVH,
+//    EVL, EVE, EVF) are sent as things happen. Without replies the board is silent, as the seed is.
+//  - The link watchdog (protocol 3, WDG): armed with a timeout, the board brakes every motor
+//    (EVD how 6) when no line has ended for that long, then stays disarmed until armed again;
+//    STA 7 reports it (STW), with whether it fired since it was last armed. Off at boot.
+//  - Why the board last reset (protocol 4): EVR right after EVB at boot, STR for STA 8.
 //  - Protocol v2 settings per motor (SET/GET, proto::kSettings): current, decay, acceleration,
 //    max rate, homing end, seek rate, pull-off and slow locate; soft limits (LIM); the checksum
 //    mode (CRC), switched after its own ACK.
@@ -135,6 +139,9 @@ class Controller {
   proto::ChecksumMode checksum_mode() const { return parser_.checksum_mode(); }
   uint32_t lines_accepted() const { return accepted_; }
   uint32_t lines_refused() const { return refused_; }
+  // The link watchdog: its timeout (0 off) and when it fires unless a line ends first.
+  uint32_t watchdog_ms() const { return watchdog_ms_; }
+  hal::Ticks watchdog_due() const { return watchdog_at_; }
   const StepScheduler& scheduler() const { return scheduler_; }
   const drv8711::Drv8711& driver(uint8_t motor) const { return drivers_[index(motor)]; }
 
@@ -177,6 +184,7 @@ class Controller {
   void answer_version();
   void answer_status(uint8_t unit);
   void send_reset(proto::BoardFrameId id);  // EVR or STR
+  void check_watchdog(hal::Ticks now);
   void check_switches();
   void check_drivers(hal::Ticks now);
   void run_timers(hal::Ticks now);
@@ -213,6 +221,9 @@ class Controller {
   uint16_t servo_pulse_[proto::kServoCount];         // µs, 0 released
   uint8_t strips_[proto::kStripCount][4];            // r, g, b, w
   hal::Ticks driver_check_at_;
+  uint32_t watchdog_ms_;         // 0: off
+  hal::Ticks watchdog_at_;       // when it fires unless a line ends first
+  bool watchdog_fired_;          // since it was last armed
   proto::ChecksumMode next_mode_;                    // CRC: applied after the line's reply
   ResetReport reset_;
   hal::Ticks boot_led_at_;

@@ -257,7 +257,9 @@ void Controller::motion_ended(uint8_t motor) {
       break;
   }
   const MoveEnd end = scheduler_.last_end(motor);
-  send_motion_ended(motor, end == MoveEnd::kHalted && mo.halt_cause != 0 ? mo.halt_cause : how_from(end));
+  // The watchdog's stop brakes like any stop, yet its end is the watchdog's.
+  const bool halted = end == MoveEnd::kHalted || mo.halt_cause == proto::kEndWatchdog;
+  send_motion_ended(motor, halted && mo.halt_cause != 0 ? mo.halt_cause : how_from(end));
 }
 
 // ---------------------------------------------------------------------------------------

@@ -161,6 +161,9 @@ void fill_command(proto::CommandId id, const uint32_t* values, Command& command)
     case proto::CommandId::kChecksumMode:
       command.checksum_mode = {static_cast<uint8_t>(values[0])};
       break;
+    case proto::CommandId::kWatchdog:
+      command.watchdog = {values[0]};
+      break;
   }
 }
 
@@ -278,6 +281,9 @@ uint32_t command_values(const Command& command, uint32_t (&values)[proto::kMaxVa
     }
     case proto::CommandId::kChecksumMode:
       values[0] = command.checksum_mode.mode;
+      break;
+    case proto::CommandId::kWatchdog:
+      values[0] = command.watchdog.timeout_ms;
       break;
   }
   return proto::command_spec(command.id).value_count;

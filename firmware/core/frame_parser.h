@@ -58,6 +58,10 @@ struct ChecksumModeCommand {
   uint8_t mode;  // proto::ChecksumMode
 };
 
+struct WatchdogCommand {  // protocol 3
+  uint32_t timeout_ms;   // 0 off
+};
+
 struct Command {
   proto::CommandId id;
   union {
@@ -68,6 +72,7 @@ struct Command {
     SettingCommand setting;
     LimitsCommand limits;
     ChecksumModeCommand checksum_mode;
+    WatchdogCommand watchdog;
   };
 };
 

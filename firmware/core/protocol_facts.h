@@ -133,6 +133,8 @@ enum class CommandId : uint8_t {
   kGet,           // GET: read a motor setting
   kLimits,        // LIM: soft travel limits
   kChecksumMode,  // CRC: the seed's sum or CRC-16
+  // Protocol 3.
+  kWatchdog,      // WDG: the link watchdog
 };
 
 enum FieldFlag : uint8_t {
@@ -217,10 +219,12 @@ static_assert(kSettingHomeLocate == kSettingCount, "one SettingId per kSettings 
 // STA's units.
 inline constexpr uint32_t kUnitBoard = 4;        // switches, emergency, servos
 inline constexpr uint32_t kUnitFirstStrip = 5;   // 5 and 6: LED strips 1 and 2
-inline constexpr uint32_t kUnitReset = kUnitFirstStrip + kStripCount;  // 7: why the board last reset (protocol 4)
+inline constexpr uint32_t kUnitWatchdog = kUnitFirstStrip + kStripCount;  // 7, protocol 3
+inline constexpr uint32_t kUnitReset = kUnitWatchdog + 1;  // 8: why the board last reset (protocol 4)
 
 inline constexpr FieldSpec kStatusFields[] = {
-    {"unit", 1, kUnitReset, 0, 0, 0, "1-3 a motor, 4 the board, 5-6 LED strip 1-2, 7 the last reset (protocol 4)"},
+    {"unit", 1, kUnitReset, 0, 0, 0,
+     "1-3 a motor, 4 the board, 5-6 LED strip 1-2, 7 the link watchdog, 8 the last reset (protocol 4)"},
 };
 inline constexpr FieldSpec kSetFields[] = {
     {"motor", 1, kMotorCount, 0, 0, 0, "stepper 1-3"},
@@ -241,6 +245,13 @@ inline constexpr FieldSpec kLimitFields[] = {
 inline constexpr FieldSpec kChecksumModeFields[] = {
     {"mode", 0, 1, 0, 0, 0, "0 the seed's sum, 1 CRC-16"},
 };
+// The link watchdog (docs/protocol.md "Link watchdog"): with a timeout set, the board brakes
+// every motor when no line has ended for that long. A minute bounds how long a lost host's
+// motors may run on.
+inline constexpr uint32_t kWatchdogMaxMs = 60000;
+inline constexpr FieldSpec kWatchdogFields[] = {
+    {"timeout_ms", 0, kWatchdogMaxMs, 0, 0, 0, "brake every motor after this long without a line; 0 off"},
+};
 
 inline constexpr CommandSpec kCommands[] = {
     {"STM", CommandId::kStepper, 5, kStepperFields, 1, "stepper: move, run, stop or home"},
@@ -252,6 +263,7 @@ inline constexpr CommandSpec kCommands[] = {
     {"GET", CommandId::kGet, 2, kGetFields, -1, "query: a motor setting"},
     {"LIM", CommandId::kLimits, 5, kLimitFields, -1, "soft travel limits of a motor"},
     {"CRC", CommandId::kChecksumMode, 1, kChecksumModeFields, -1, "checksum mode: sum or CRC-16"},
+    {"WDG", CommandId::kWatchdog, 1, kWatchdogFields, -1, "link watchdog: arm with a timeout, 0 disarms"},
 };
 inline constexpr uint32_t kCommandCount = sizeof(kCommands) / sizeof(kCommands[0]);
 
@@ -272,33 +284,6 @@ static_assert(commands_indexed_by_id(), "kCommands[i] must describe CommandId i"
 
 inline constexpr uint32_t kProtocolVersion = 4;
 inline constexpr uint32_t kFirmwareVersion = 100;  // major·10000 + minor·100 + patch: 0.1.0
-
-// ---------------------------------------------------------------------------------------
-// Features and the first protocol version that has each (docs/protocol.md "Versions"). The host
-// asks VER and checks a feature here before relying on it; a board older than that is told
-// "the board's firmware is too old for this: reflash", never met with a frame it cannot decode.
-
-enum class Feature : uint8_t {
-  kResetCause,  // EVR after EVB at boot, STA 7 answered with STR
-};
-struct FeatureSpec {
-  Feature feature;
-  uint32_t since;     // the first protocol version that has it
-  const char* name;   // stable identifier
-  const char* text;   // what it is, for people
-};
-inline constexpr FeatureSpec kFeatures[] = {
-    {Feature::kResetCause, 4, "reset_cause", "the reset cause and fault record (EVR, STA 7)"},
-};
-inline constexpr uint32_t kFeatureCount = sizeof(kFeatures) / sizeof(kFeatures[0]);
-constexpr const FeatureSpec& feature_spec(Feature f) { return kFeatures[static_cast<uint8_t>(f)]; }
-constexpr bool features_indexed_by_id() {
-  for (uint32_t i = 0; i < kFeatureCount; ++i) {
-    if (static_cast<uint32_t>(kFeatures[i].feature) != i || kFeatures[i].since > kProtocolVersion) return false;
-  }
-  return true;
-}
-static_assert(features_indexed_by_id(), "kFeatures[i] describes Feature i, no later than this protocol");
 
 // Why the board last reset (EVR, STR). The SAMD21 reads it from PM RCAUSE; kFault is a system
 // reset its fault handler requested after recording where the fault happened.
@@ -331,8 +316,9 @@ enum class BoardFrameId : uint8_t {
   kLimitChanged,
   kEmergencyChanged,
   kDriverFault,
-  kResetStatus,  // protocol 4
-  kResetEvent,   // protocol 4
+  kWatchdogStatus,  // protocol 3
+  kResetStatus,     // protocol 4
+  kResetEvent,      // protocol 4
 };
 
 struct BoardFrameSpec {
@@ -349,6 +335,7 @@ inline constexpr uint32_t kEndStopped = 2;
 inline constexpr uint32_t kEndLimit = 3;
 inline constexpr uint32_t kEndEmergency = 4;
 inline constexpr uint32_t kEndDropped = 5;
+inline constexpr uint32_t kEndWatchdog = 6;  // protocol 3: braked by the link watchdog
 
 inline constexpr FieldSpec kNakFields[] = {
     {"reason", 1, 255, 0, 0, 0, "reason code"},
@@ -383,7 +370,8 @@ inline constexpr FieldSpec kBoardStatusFields[] = {
 };
 inline constexpr FieldSpec kMotionEndedFields[] = {
     {"motor", 1, kMotorCount, 0, 0, 0, "stepper 1-3"},
-    {"how", kEndCompleted, kEndDropped, 0, 0, 0, "1 completed, 2 stopped, 3 limit switch, 4 emergency, 5 dropped"},
+    {"how", kEndCompleted, kEndWatchdog, 0, 0, 0,
+     "1 completed, 2 stopped, 3 limit switch, 4 emergency, 5 dropped, 6 link watchdog"},
     {"pos_sign", 0, 1, 0, 0, 0, "0 plus, 1 minus"},
     {"pos", 0, kIntMax, 0, 0, 0, "position, 1/256 step"},
 };
@@ -397,7 +385,7 @@ inline constexpr FieldSpec kBootedFields[] = {
     {"protocol", 1, 255, 0, 0, 0, "protocol version"},
     {"firmware", 0, kIntMax, 0, 0, 0, "major*10000 + minor*100 + patch"},
 };
-// EVR (after EVB at boot) and STR (the answer to STA 7): why the board last reset. The fault
+// EVR (after EVB at boot) and STR (the answer to STA 8): why the board last reset. The fault
 // fields are 0 unless cause is fault. Addresses travel as decimal numbers up to INT_MAX: `lr`
 // drops bit 31, which only the exception-return values 0xFFFFFFF1/9/D have on this chip.
 inline constexpr FieldSpec kResetFields[] = {
@@ -416,6 +404,10 @@ inline constexpr FieldSpec kLimitChangedFields[] = {
 };
 inline constexpr FieldSpec kEmergencyChangedFields[] = {
     {"pressed", 0, 1, 0, 0, 0, "1 pressed, 0 released"},
+};
+inline constexpr FieldSpec kWatchdogStatusFields[] = {
+    {"timeout_ms", 0, kWatchdogMaxMs, 0, 0, 0, "armed with this timeout; 0 off"},
+    {"fired", 0, 1, 0, 0, 0, "1: it braked the motors since it was last armed"},
 };
 inline constexpr FieldSpec kDriverFaultFields[] = {
     {"motor", 1, kMotorCount, 0, 0, 0, "stepper 1-3"},
@@ -436,7 +428,8 @@ inline constexpr BoardFrameSpec kBoardFrames[] = {
     {"EVL", BoardFrameId::kLimitChanged, 3, kLimitChangedFields, "event: a limit switch changed"},
     {"EVE", BoardFrameId::kEmergencyChanged, 1, kEmergencyChangedFields, "event: the emergency switch changed"},
     {"EVF", BoardFrameId::kDriverFault, 2, kDriverFaultFields, "event: a driver fault"},
-    {"STR", BoardFrameId::kResetStatus, 5, kResetFields, "reply to STA 7 (protocol 4)"},
+    {"STW", BoardFrameId::kWatchdogStatus, 2, kWatchdogStatusFields, "reply to STA 7"},
+    {"STR", BoardFrameId::kResetStatus, 5, kResetFields, "reply to STA 8 (protocol 4)"},
     {"EVR", BoardFrameId::kResetEvent, 5, kResetFields, "event: why the board reset, after EVB (protocol 4)"},
 };
 inline constexpr uint32_t kBoardFrameCount = sizeof(kBoardFrames) / sizeof(kBoardFrames[0]);
@@ -453,6 +446,41 @@ constexpr bool board_frames_indexed_by_id() {
 static_assert(board_frames_indexed_by_id(), "kBoardFrames[i] must describe BoardFrameId i");
 // Events are told from replies by the first letter of the name.
 constexpr bool is_event(const BoardFrameSpec& frame) { return frame.name[0] == 'E'; }
+
+// ---------------------------------------------------------------------------------------
+// Features and the protocol version that brought each. A host asks the board's VER before it
+// relies on one (hmc::Session::supports / require) and tells the user of an older board to
+// reflash, instead of failing on a refusal or a frame it cannot read. Every protocol change
+// raises kProtocolVersion and adds its row here.
+
+enum class Feature : uint8_t {
+  kLinkWatchdog,  // WDG, STA 7 (STW), EVD how 6
+  kResetCause,    // EVR after EVB at boot, STA 8 answered with STR
+};
+
+struct FeatureSpec {
+  Feature feature;
+  uint32_t since;    // the first protocol version that has it
+  const char* name;  // stable identifier
+  const char* text;  // what it is, for people
+};
+
+inline constexpr FeatureSpec kFeatures[] = {
+    {Feature::kLinkWatchdog, 3, "link_watchdog", "the link watchdog"},
+    {Feature::kResetCause, 4, "reset_cause", "the reset cause and fault record (EVR, STA 8)"},
+};
+inline constexpr uint32_t kFeatureCount = sizeof(kFeatures) / sizeof(kFeatures[0]);
+
+constexpr const FeatureSpec& feature_spec(Feature f) { return kFeatures[static_cast<uint8_t>(f)]; }
+
+constexpr bool features_indexed_and_released() {
+  for (uint32_t i = 0; i < kFeatureCount; ++i) {
+    if (static_cast<uint32_t>(kFeatures[i].feature) != i || kFeatures[i].since > kProtocolVersion) return false;
+  }
+  return true;
+}
+static_assert(features_indexed_and_released(),
+              "kFeatures[i] describes Feature i, from a protocol version this firmware speaks");
 
 constexpr bool is_power_of_two(uint32_t v) { return v != 0 && (v & (v - 1)) == 0; }
 

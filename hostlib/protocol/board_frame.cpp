@@ -52,6 +52,7 @@ template <typename IO> constexpr void fields(IO& io, LimitChanged& f) {
 }
 template <typename IO> constexpr void fields(IO& io, EmergencyChanged& f) { io.flag(f.pressed); }
 template <typename IO> constexpr void fields(IO& io, DriverFault& f) { io.number(f.motor); io.number(f.status); }
+template <typename IO> constexpr void fields(IO& io, WatchdogStatus& f) { io.number(f.timeout_ms); io.flag(f.fired); }
 template <typename IO> constexpr void fields(IO& io, ResetInfo& f) {
   io.code(f.cause); io.number(f.exception); io.number(f.pc); io.number(f.lr); io.number(f.context);
 }
@@ -93,7 +94,7 @@ static_assert(variant_follows_table(std::make_index_sequence<std::variant_size_v
               "BoardFrame's alternatives are ordered by BoardFrameId and hold the table's values");
 static_assert(proto::kMotorStatusFields[1].max == static_cast<uint32_t>(MotorState::kSelfTest) &&
                   proto::kMotionEndedFields[1].min == static_cast<uint32_t>(MotionEnd::kCompleted) &&
-                  proto::kMotionEndedFields[1].max == static_cast<uint32_t>(MotionEnd::kDropped),
+                  proto::kMotionEndedFields[1].max == static_cast<uint32_t>(MotionEnd::kWatchdog),
               "the enums span their fields' ranges");
 
 // Values (already range-checked) into a typed frame.
@@ -247,6 +248,7 @@ const char* motion_end_name(MotionEnd how) {
     case MotionEnd::kLimit: return "limit";
     case MotionEnd::kEmergency: return "emergency";
     case MotionEnd::kDropped: return "dropped";
+    case MotionEnd::kWatchdog: return "watchdog";
   }
   return "?";
 }
@@ -388,6 +390,8 @@ struct Describer {
       case MotionEnd::kLimit: return who + " halted by a limit switch " + at_position(e.position);
       case MotionEnd::kEmergency: return who + " halted by the emergency switch " + at_position(e.position);
       case MotionEnd::kDropped: return who + ": a waiting move was dropped, " + at_position(e.position);
+      case MotionEnd::kWatchdog:
+        return who + " braked by the link watchdog (no line from the host) " + at_position(e.position);
     }
     return who;
   }
@@ -413,6 +417,11 @@ struct Describer {
     const std::string hex = {'0', 'x', kHex[(f.status >> 4) & 0xF], kHex[f.status & 0xF]};
     return "motor " + std::to_string(f.motor) + " driver fault: " + (bits.empty() ? std::string("none") : bits) +
            " (STATUS " + hex + ")";
+  }
+  std::string operator()(const WatchdogStatus& w) const {
+    std::string out = w.timeout_ms == 0 ? "link watchdog off"
+                                        : "link watchdog armed: " + std::to_string(w.timeout_ms) + " ms";
+    return out + (w.fired ? "; it fired: the board braked every motor when the host went silent" : "");
   }
 };
 

@@ -52,6 +52,10 @@ template <>
 struct Layout<ChecksumModeCommand> {
   static constexpr std::array kFields{&ChecksumModeCommand::mode};
 };
+template <>
+struct Layout<WatchdogCommand> {
+  static constexpr std::array kFields{&WatchdogCommand::timeout_ms};
+};
 
 // Alternative I of Command is CommandId I and has that command's number of values.
 template <std::size_t... I>
@@ -154,6 +158,7 @@ std::string describe_stepper(const StepperMove& s) {
 std::string unit_text(uint32_t unit) {
   if (unit >= 1 && unit <= proto::kMotorCount) return "stepper " + std::to_string(unit);
   if (unit == proto::kUnitBoard) return "the board (switches and servos)";
+  if (unit == proto::kUnitWatchdog) return "the link watchdog";
   if (unit >= proto::kUnitFirstStrip && unit < proto::kUnitFirstStrip + proto::kStripCount) {
     return "LED strip " + std::to_string(unit - proto::kUnitFirstStrip + 1);
   }
@@ -195,6 +200,11 @@ struct Describer {
   std::string operator()(const ChecksumModeCommand& c) const {
     return c.mode == static_cast<uint32_t>(proto::ChecksumMode::kCrc16) ? "checksums from now on: CRC-16"
                                                                          : "checksums from now on: the seed's sum";
+  }
+  std::string operator()(const WatchdogCommand& w) const {
+    return w.timeout_ms == 0 ? "link watchdog off"
+                             : "link watchdog on: brake every motor after " + std::to_string(w.timeout_ms) +
+                                   " ms without a line";
   }
 };
 

@@ -113,6 +113,76 @@ std::string explain_refusal(Reason reason, const Command* command, const BoardMo
 Session::Session(std::unique_ptr<Transport> transport, const SessionOptions& options)
     : transport_(std::move(transport)), options_(options) {}
 
+Session::~Session() {
+  if (watchdog_armed()) (void)disarm_watchdog();  // best effort: the link may be gone
+}
+
+bool Session::supports(proto::Feature feature) const {
+  return firmware_ == Firmware::kV2 && version_ && version_->protocol >= proto::feature_spec(feature).since;
+}
+
+SessionResult<Done> Session::require(proto::Feature feature) const {
+  if (supports(feature)) return Done{};
+  const proto::FeatureSpec& spec = proto::feature_spec(feature);
+  const std::string board = firmware_ == Firmware::kSeed
+                                ? "the board runs the original (seed) firmware"
+                                : "the board speaks protocol " + std::to_string(version_ ? version_->protocol : 0);
+  return make_error(SessionError::Kind::kTooOld, "the board's firmware is too old for this: reflash (" +
+                                                     std::string(spec.text) + " needs protocol " +
+                                                     std::to_string(spec.since) + "; " + board + ")");
+}
+
+SessionResult<Done> Session::arm_watchdog(Millis timeout) {
+  if (SessionResult<Done> ok = require(proto::Feature::kLinkWatchdog); !ok) return ok;
+  const uint32_t ms = static_cast<uint32_t>(std::clamp<int64_t>(timeout.count(), 1, proto::kWatchdogMaxMs));
+  if (SessionResult<BoardFrame> armed = execute(WatchdogCommand{ms}); !armed) return armed.error();
+  if (model_.watchdog) *model_.watchdog = WatchdogStatus{ms, false};
+  if (!watchdog_armed()) {
+    keep_alive_stop_ = false;
+    keep_alive_period_ = Millis{std::max<uint32_t>(ms / 4, 1)};
+    keep_alive_ = std::thread([this] { keep_alive(); });
+  }
+  return Done{};
+}
+
+SessionResult<Done> Session::disarm_watchdog() {
+  stop_keep_alive();
+  SessionResult<BoardFrame> off = execute(WatchdogCommand{0});
+  if (!off) return off.error();
+  if (model_.watchdog) model_.watchdog->timeout_ms = 0;
+  return Done{};
+}
+
+void Session::stop_keep_alive() {
+  if (!keep_alive_.joinable()) return;
+  {
+    const std::lock_guard<std::mutex> lock(transport_mutex_);
+    keep_alive_period_ = Millis{0};
+  }
+  {
+    const std::lock_guard<std::mutex> lock(keep_alive_mutex_);
+    keep_alive_stop_ = true;
+  }
+  keep_alive_wake_.notify_all();
+  keep_alive_.join();
+}
+
+// A blank line feeds the board's watchdog and gets no reply, so it never disturbs the count of
+// replies the main thread matches to its lines.
+void Session::keep_alive() {
+  std::unique_lock<std::mutex> wake(keep_alive_mutex_);
+  while (!keep_alive_wake_.wait_for(wake, keep_alive_period_ / 2, [this] { return keep_alive_stop_; })) {
+    const std::lock_guard<std::mutex> lock(transport_mutex_);
+    keep_alive_if_due();
+  }
+}
+
+void Session::keep_alive_if_due() {
+  if (keep_alive_period_.count() == 0 || Clock::now() - last_write_ < keep_alive_period_) return;
+  (void)transport_->write("\n");  // a failed link is the reader's to report
+  last_write_ = Clock::now();
+}
+
 SessionResult<std::unique_ptr<Session>> Session::open(std::unique_ptr<Transport> transport,
                                                        const SessionOptions& options) {
   std::unique_ptr<Session> session(new Session(std::move(transport), options));
@@ -191,26 +261,17 @@ std::string Session::description() const {
 
 uint32_t Session::max_rate() const { return version_ ? version_->max_rate : 50000; }
 
-bool Session::supports(proto::Feature feature) const {
-  return firmware_ == Firmware::kV2 && version_ && version_->protocol >= proto::feature_spec(feature).since;
-}
-
-SessionResult<Done> Session::require(proto::Feature feature) const {
-  if (supports(feature)) return Done{};
-  const proto::FeatureSpec& spec = proto::feature_spec(feature);
-  const std::string board = firmware_ == Firmware::kSeed ? std::string("the seed firmware")
-                            : version_                   ? "protocol " + std::to_string(version_->protocol)
-                                                         : std::string("an unknown protocol");
-  return make_error(SessionError::Kind::kRefused,
-                    "the board's firmware is too old for this: reflash (" + std::string(spec.text) + " needs protocol " +
-                        std::to_string(spec.since) + "; the board runs " + board + ")");
-}
-
 bool Session::legacy_rules() const { return firmware_ == Firmware::kSeed || (version_ && version_->legacy); }
 
 SessionResult<Done> Session::write_line(const std::string& line, std::optional<Command> command) {
   if (options_.on_send) options_.on_send(line);
-  if (Status written = transport_->write(line + "\n"); !written) return link_error(written.error().message);
+  Status written = Done{};
+  {
+    const std::lock_guard<std::mutex> lock(transport_mutex_);
+    written = transport_->write(line + "\n");
+    last_write_ = Clock::now();
+  }
+  if (!written) return link_error(written.error().message);
   if (firmware_ == Firmware::kSeed) {
     if (command) apply_sent(*command);
   } else if (!is_blank(line)) {
@@ -221,7 +282,13 @@ SessionResult<Done> Session::write_line(const std::string& line, std::optional<C
 }
 
 SessionResult<std::vector<BoardFrame>> Session::pump(Millis timeout) {
-  Result<std::string> bytes = transport_->read(timeout);
+  Result<std::string> bytes = std::string();
+  {
+    const std::lock_guard<std::mutex> lock(transport_mutex_);
+    // The keep-alive thread may not win the lock between two reads: the reader sends it too.
+    keep_alive_if_due();
+    bytes = transport_->read(timeout);
+  }
   if (!bytes) return link_error(bytes.error().message);
   splitter_.feed(*bytes);
   std::vector<BoardFrame> frames;
@@ -305,6 +372,8 @@ SessionResult<Done> Session::check(const Command& command) const {
                       Reason::kUnknownCommand);
   } else if (const auto* query = std::get_if<StatusQuery>(&command); query && query->unit == proto::kUnitReset) {
     if (SessionResult<Done> ok = require(proto::Feature::kResetCause); !ok) return ok;
+  } else if (query && query->unit == proto::kUnitWatchdog) {
+    if (SessionResult<Done> ok = require(proto::Feature::kLinkWatchdog); !ok) return ok;
   }
   return Done{};
 }
@@ -346,7 +415,9 @@ SessionResult<BoardFrame> Session::send_line(std::string_view line) {
 
 SessionResult<Done> Session::refresh() {
   if (firmware_ == Firmware::kSeed) return Done{};
-  for (uint32_t unit = 1; unit <= proto::kUnitFirstStrip + proto::kStripCount - 1; ++unit) {
+  const uint32_t last = supports(proto::Feature::kLinkWatchdog) ? proto::kUnitWatchdog
+                                                                 : proto::kUnitFirstStrip + proto::kStripCount - 1;
+  for (uint32_t unit = 1; unit <= last; ++unit) {
     SessionResult<BoardFrame> reply = execute(StatusQuery{unit});
     if (!reply) return reply.error();
   }
@@ -577,6 +648,7 @@ void Session::apply(const BoardFrame& frame) {
     }
     void operator()(const EmergencyChanged& e) const { s.model_.board.emergency = e.pressed; }
     void operator()(const DriverFault&) const {}
+    void operator()(const WatchdogStatus& w) const { s.model_.watchdog = w; }
     void operator()(const ResetStatus& r) const { s.model_.last_reset = r; }
     void operator()(const ResetEvent& r) const { s.model_.last_reset = r; }
   };

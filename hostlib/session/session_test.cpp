@@ -87,13 +87,13 @@ class FailingTransport : public hmc::Transport {
 };
 
 // A board whose firmware predates protocol 4, made from the simulated board: its VER and EVB
-// say protocol 2, it sends no EVR, and it refuses STA 7 (out of its 1-6) as such a board does.
+// say protocol 2, it sends no EVR, and it refuses STA 8 (out of its 1-6) as such a board does.
 class Protocol2Transport : public hmc::Transport {
  public:
   explicit Protocol2Transport(std::unique_ptr<hmc::Transport> inner) : inner_(std::move(inner)) {}
   hmc::Status write(std::string_view bytes) override {
     writes.emplace_back(bytes);
-    if (bytes.rfind("STX#2#STA#7#", 0) == 0) {
+    if (bytes.rfind("STX#2#STA#8#", 0) == 0) {
       pending_ += "STX#4#NAK#9#3#10#22#ETX\n";
       return hmc::Done{};
     }
@@ -148,14 +148,14 @@ TEST_CASE("the reset cause comes with the board's state; a board predating it is
   CHECK(s->version()->protocol == 2);
   CHECK_FALSE(s->supports(hmc::proto::Feature::kResetCause));
   CHECK_FALSE(s->model().last_reset.has_value());
-  for (const std::string& line : raw->writes) CHECK(line.rfind("STX#2#STA#7#", 0) == std::string::npos);
+  for (const std::string& line : raw->writes) CHECK(line.rfind("STX#2#STA#8#", 0) == std::string::npos);
   const size_t sent = raw->writes.size();
   auto reply = s->execute(hmc::StatusQuery{hmc::proto::kUnitReset});
   REQUIRE_FALSE(reply.ok());
-  CHECK(reply.error().kind == SessionError::Kind::kRefused);
+  CHECK(reply.error().kind == SessionError::Kind::kTooOld);
   CHECK(reply.error().message ==
-        "the board's firmware is too old for this: reflash (the reset cause and fault record (EVR, STA 7) needs "
-        "protocol 4; the board runs protocol 2)");
+        "the board's firmware is too old for this: reflash (the reset cause and fault record (EVR, STA 8) needs "
+        "protocol 4; the board speaks protocol 2)");
   CHECK(raw->writes.size() == sent);
 }
 

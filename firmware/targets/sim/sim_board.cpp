@@ -377,7 +377,11 @@ void SimBoard::trace_bytes(const char* event, std::string& pending, const uint8_
     }
     if (!pending.empty()) {
       trace_line(std::string("\"ev\":\"") + event + "\",\"line\":" + json_string(pending));
+    } else if (c == '\n' && !after_cr_) {
+      // A blank line (not the LF of a CRLF): a host's keep-alive for the link watchdog.
+      trace_line(std::string("\"ev\":\"") + event + "_blank\"");
     }
+    after_cr_ = c == '\r';
     pending.clear();
   }
 }

@@ -191,6 +191,7 @@ class SimBoard {
   Ticks tx_free_at_ = 0;          // when the transmit wire finishes its last byte
   std::string output_;            // through the wire, not yet taken
   std::string rx_line_, tx_line_;
+  bool after_cr_ = false;  // the last line end traced was a CR
   bool record_steps_ = false;
   std::array<std::vector<Ticks>, 3> step_times_;
   std::ostream* trace_ = nullptr;

@@ -35,6 +35,8 @@ constexpr Ticks kBusySlice = kMillisecond;
 constexpr Ticks kIdleSlice = 50 * kMillisecond;
 // Fast: virtual time run between looks at the link and the control channel.
 constexpr Ticks kFastSlice = kMillisecond;
+// Fast: how far short of the link watchdog's deadline virtual time waits for the host.
+constexpr Ticks kWatchdogMargin = 5 * kMillisecond;
 
 class Simulator {
  public:
@@ -56,7 +58,7 @@ class Simulator {
       if (!options_.fast) {
         advance_to(wall_ticks());
       } else if (board_.busy()) {
-        advance_to(board_.now() + kFastSlice);
+        advance_to(fast_target());
       } else if (!script_done()) {
         advance_to(script_[next_event_].at);
       }
@@ -85,6 +87,30 @@ class Simulator {
     return ns / 1000u * hal::kTicksPerMicrosecond + ns % 1000u * hal::kTicksPerMicrosecond / 1000u;
   }
 
+  // Fast virtual time outruns any host: a host's keep-alive, sent every so often in wall time,
+  // would be seconds apart in virtual time and the link watchdog would brake every motor of a
+  // live host. So virtual time stops just short of the watchdog's deadline and waits there, in
+  // wall time, as long as the watchdog's timeout for a line from the host; only a host silent for
+  // that long lets it fire.
+  Ticks fast_target() {
+    const Ticks target = board_.now() + kFastSlice;
+    const fw::Controller& controller = board_.controller();
+    // Short of the deadline by room for a line in transit (its bytes arrive in virtual time).
+    const Ticks due = controller.watchdog_due() - kWatchdogMargin;
+    if (controller.watchdog_ms() == 0 || target < due || board_.receiving()) {
+      holding_ = false;
+      return target;
+    }
+    const Ticks wall = wall_ticks();
+    if (!holding_ || due != held_due_) {
+      holding_ = true;
+      held_due_ = due;
+      held_until_ = wall + static_cast<Ticks>(controller.watchdog_ms()) * kMillisecond;
+    }
+    if (wall >= held_until_) return target;  // the host stayed silent: let the watchdog fire
+    return due > board_.now() ? due - 1 : board_.now();
+  }
+
   // Runs the board to `t`, applying the script's events at their exact times.
   void advance_to(Ticks t) {
     while (!script_done() && script_[next_event_].at <= t) {
@@ -107,6 +133,10 @@ class Simulator {
     std::optional<Ticks> limit;
     if (options_.fast) {
       if (board_.busy() || !script_done()) limit = 0;
+      if (holding_) {
+        const Ticks wall = wall_ticks();
+        limit = held_until_ > wall ? std::min<Ticks>(held_until_ - wall, kIdleSlice) : 0;
+      }
     } else {
       const Ticks now = board_.now();
       Ticks deadline =
@@ -171,6 +201,9 @@ class Simulator {
   ControlServer* control_;
   std::vector<ScriptEvent> script_;
   size_t next_event_ = 0;
+  bool holding_ = false;  // fast: virtual time waits short of the watchdog's deadline
+  Ticks held_due_ = 0;
+  Ticks held_until_ = 0;  // in wall time
   std::ostream* trace_;
   sigset_t wait_mask_;
   std::chrono::steady_clock::time_point origin_;

@@ -13,8 +13,8 @@
 #include <string_view>
 #include <variant>
 
-#include "core/crc16.h"
-#include "core/protocol_facts.h"
+#include "hmc/crc16.h"
+#include "hmc/protocol_facts.h"
 #include "hmc/codec.h"
 #include "hmc/result.h"
 
@@ -107,7 +107,7 @@ struct Booted {
 };
 
 // How a motion ended (EVD): the values are proto::kEnd*.
-enum class MotionEnd : uint8_t { kCompleted = 1, kStopped, kLimit, kEmergency, kDropped };
+enum class MotionEnd : uint8_t { kCompleted = 1, kStopped, kLimit, kEmergency, kDropped, kWatchdog };
 
 // EVD: a motion ended.
 struct MotionEnded {
@@ -146,6 +146,12 @@ struct DriverFault {
   bool operator==(const DriverFault& o) const { return motor == o.motor && status == o.status; }
 };
 
+// STW (STA 7, protocol 3): the link watchdog.
+struct WatchdogStatus {
+  uint32_t timeout_ms = 0;  // armed with this timeout; 0 off
+  bool fired = false;       // it braked the motors since it was last armed
+  bool operator==(const WatchdogStatus& o) const { return timeout_ms == o.timeout_ms && fired == o.fired; }
+};
 // Why the board last reset and, after a fault, where (protocol 4, proto::kResetFields).
 struct ResetInfo {
   proto::ResetCause cause = proto::ResetCause::kUnknown;
@@ -157,15 +163,15 @@ struct ResetInfo {
     return cause == o.cause && exception == o.exception && pc == o.pc && lr == o.lr && context == o.context;
   }
 };
-// STR: the answer to STA 7.
+// STR: the answer to STA 8.
 struct ResetStatus : ResetInfo {};
 // EVR: sent right after EVB at boot.
 struct ResetEvent : ResetInfo {};
 
 // Ordered by proto::BoardFrameId.
 using BoardFrame = std::variant<Ack, Nak, Version, MotorStatus, BoardStatus, StripStatus, SettingValue, Booted,
-                                MotionEnded, HomingEnded, LimitChanged, EmergencyChanged, DriverFault, ResetStatus,
-                                ResetEvent>;
+                                MotionEnded, HomingEnded, LimitChanged, EmergencyChanged, DriverFault,
+                                WatchdogStatus, ResetStatus, ResetEvent>;
 
 proto::BoardFrameId board_frame_id(const BoardFrame& frame);
 const proto::BoardFrameSpec& board_frame_spec(const BoardFrame& frame);

@@ -13,8 +13,8 @@
 #include <string_view>
 #include <variant>
 
-#include "core/crc16.h"
-#include "core/protocol_facts.h"
+#include "hmc/crc16.h"
+#include "hmc/protocol_facts.h"
 
 namespace hmc {
 
@@ -96,8 +96,14 @@ struct ChecksumModeCommand {
   bool operator==(const ChecksumModeCommand& o) const { return mode == o.mode; }
 };
 
+// WDG (protocol 3): arm the link watchdog with a timeout in ms, or disarm it with 0.
+struct WatchdogCommand {
+  uint32_t timeout_ms = 0;
+  bool operator==(const WatchdogCommand& o) const { return timeout_ms == o.timeout_ms; }
+};
+
 using Command = std::variant<StepperMove, ServoMove, LedColor, VersionQuery, StatusQuery, SetSetting,
-                             GetSetting, SoftLimits, ChecksumModeCommand>;
+                             GetSetting, SoftLimits, ChecksumModeCommand, WatchdogCommand>;
 
 // A command's values in wire order; only the first `count` are meaningful.
 struct CommandValues {

@@ -14,14 +14,25 @@
 //
 // A session never leaves a motor running because the host gave up: when the interrupt callback
 // fires (Ctrl-C) or the link fails while it waits for a motion, it sends a stop to every motor.
+// For what the host cannot catch (SIGKILL, a crash, a cut cable), arm_watchdog() arms the board's
+// link watchdog (protocol 3): a background thread then keeps the link alive with a blank line
+// whenever nothing else was sent for a quarter of the timeout, and the destructor disarms it.
+//
+// Features newer than protocol 2 are asked for with supports()/require() (proto::kFeatures); an
+// older board gets kTooOld, "the board's firmware is too old for this: reflash", never a
+// refusal or a frame the host cannot read.
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <deque>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <optional>
+#include <thread>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -55,6 +66,7 @@ struct SessionError {
     kNoReply,      // the board stopped answering
     kLink,         // the port failed or the connection was lost
     kInterrupted,  // interrupted (Ctrl-C); every motor was sent a stop
+    kTooOld,       // the board's firmware predates a feature asked for: reflash
   };
   Kind kind = Kind::kLink;
   std::string message;                        // in words, with what to do
@@ -74,6 +86,8 @@ struct BoardModel {
   bool reported = false;
   // How each motor's last motion ended (v2: from EVD), until the next one starts.
   std::array<std::optional<MotionEnd>, proto::kMotorCount> last_end{};
+  // The link watchdog (STA 7), when the board has one (protocol 3).
+  std::optional<WatchdogStatus> watchdog;
   // Why the board last reset (protocol 4: STR when the session opened, EVR when it reboots);
   // nothing from a board that predates it.
   std::optional<ResetInfo> last_reset;
@@ -102,6 +116,20 @@ class Session {
   // reads the board's state (STA for every unit).
   static SessionResult<std::unique_ptr<Session>> open(std::unique_ptr<Transport> transport,
                                                       const SessionOptions& options);
+  // Disarms the link watchdog if this session armed it.
+  ~Session();
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+  // Whether the board's protocol has `feature` (never for the seed firmware).
+  bool supports(proto::Feature feature) const;
+  // Done, or a kTooOld error naming the feature, the protocol that brought it and the board's.
+  SessionResult<Done> require(proto::Feature feature) const;
+  // Arms the board's link watchdog with `timeout` (at most proto::kWatchdogMaxMs) and keeps the
+  // link alive from a background thread until disarm_watchdog() or the session's end.
+  SessionResult<Done> arm_watchdog(Millis timeout);
+  SessionResult<Done> disarm_watchdog();
+  bool watchdog_armed() const { return keep_alive_.joinable(); }
 
   Firmware firmware() const { return firmware_; }
   // The board's VER answer (v2 only).
@@ -112,11 +140,6 @@ class Session {
   // The rate budget of the board in steps/s (VER; the seed's figure is unknown, ours is used).
   uint32_t max_rate() const;
   bool legacy_rules() const;
-  // Whether the board's protocol (VER) has a feature (proto::kFeatures); the seed firmware has
-  // none. require() is the same as an error to return: "the board's firmware is too old for
-  // this: reflash", naming the feature and both versions.
-  bool supports(proto::Feature feature) const;
-  SessionResult<Done> require(proto::Feature feature) const;
 
   // Checks a command against the protocol and the model without sending it.
   SessionResult<Done> check(const Command& command) const;
@@ -175,6 +198,9 @@ class Session {
   SessionError link_error(const std::string& message);
   // Sends a stop to every motor, then gives back `error`: a wait that fails leaves nothing moving.
   SessionError stopping(SessionError error);
+  void stop_keep_alive();
+  void keep_alive();
+  void keep_alive_if_due();  // with transport_mutex_ held
 
   // Seed firmware: the move each motor was last sent, timed from when it was sent.
   struct SeedMove {
@@ -200,6 +226,14 @@ class Session {
   std::vector<BoardFrame> pending_replies_;       // replies read, not yet taken
   bool rebooted_ = false;                     // EVB seen since the last wait began
   bool detecting_ = false;                    // open(): the board's checksum mode is not known yet
+  // The keep-alive thread shares the transport: every read and write holds this.
+  std::mutex transport_mutex_;
+  Clock::time_point last_write_{};  // guarded by transport_mutex_
+  Millis keep_alive_period_{0};     // guarded by transport_mutex_; 0: the watchdog is not armed
+  std::thread keep_alive_;
+  std::mutex keep_alive_mutex_;
+  std::condition_variable keep_alive_wake_;
+  bool keep_alive_stop_ = false;  // guarded by keep_alive_mutex_
 };
 
 // The board's refusal in words, with what to do: "motor 1's switch at the forward end is pressed:
