@@ -105,6 +105,8 @@ start_emu hmc-bossac --usb-pty="$tmp/usb"
 timeout 60 "$hmc" flash "$image" --method bossac --no-touch --port "$tmp/usb" >"$tmp/hmc.out" 2>&1 ||
   fail "hmc flash --method bossac: exit $?: $(cat "$tmp/hmc.out")"
 grep -q 'done: .* written at 0x2000 and verified' "$tmp/hmc.out" || fail "hmc flash said: $(cat "$tmp/hmc.out")"
+grep -q "image for board variant '[a-z]*', firmware [0-9.]*, protocol [0-9]*" "$tmp/hmc.out" ||
+  fail "hmc flash did not name the image's board variant: $(cat "$tmp/hmc.out")"
 wait_emu hmc-bossac
 check_flash hmc-bossac 0x00
 

@@ -370,6 +370,10 @@ SessionResult<Done> Session::check(const Command& command) const {
     return make_error(SessionError::Kind::kRefused,
                       std::string(command_spec(command).name) + " is a protocol v2 command: the seed firmware does not know it",
                       Reason::kUnknownCommand);
+  } else if (const auto* query = std::get_if<StatusQuery>(&command); query && query->unit == proto::kUnitReset) {
+    if (SessionResult<Done> ok = require(proto::Feature::kResetCause); !ok) return ok;
+  } else if (query && query->unit == proto::kUnitWatchdog) {
+    if (SessionResult<Done> ok = require(proto::Feature::kLinkWatchdog); !ok) return ok;
   }
   return Done{};
 }
@@ -415,6 +419,10 @@ SessionResult<Done> Session::refresh() {
                                                                  : proto::kUnitFirstStrip + proto::kStripCount - 1;
   for (uint32_t unit = 1; unit <= last; ++unit) {
     SessionResult<BoardFrame> reply = execute(StatusQuery{unit});
+    if (!reply) return reply.error();
+  }
+  if (supports(proto::Feature::kResetCause)) {
+    SessionResult<BoardFrame> reply = execute(StatusQuery{proto::kUnitReset});
     if (!reply) return reply.error();
   }
   model_.reported = true;
@@ -641,6 +649,8 @@ void Session::apply(const BoardFrame& frame) {
     void operator()(const EmergencyChanged& e) const { s.model_.board.emergency = e.pressed; }
     void operator()(const DriverFault&) const {}
     void operator()(const WatchdogStatus& w) const { s.model_.watchdog = w; }
+    void operator()(const ResetStatus& r) const { s.model_.last_reset = r; }
+    void operator()(const ResetEvent& r) const { s.model_.last_reset = r; }
   };
   std::visit(Apply{*this}, frame);
 }

@@ -9,6 +9,8 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <string>
+#include <utility>
+#include <variant>
 
 #include "hmc/codec.h"
 #include "hmc/sim_transport.h"
@@ -84,7 +86,78 @@ class FailingTransport : public hmc::Transport {
   int reads_ = 0;
 };
 
+// A board whose firmware predates protocol 4, made from the simulated board: its VER and EVB
+// say protocol 2, it sends no EVR, and it refuses STA 8 (out of its 1-6) as such a board does.
+class Protocol2Transport : public hmc::Transport {
+ public:
+  explicit Protocol2Transport(std::unique_ptr<hmc::Transport> inner) : inner_(std::move(inner)) {}
+  hmc::Status write(std::string_view bytes) override {
+    writes.emplace_back(bytes);
+    if (bytes.rfind("STX#2#STA#8#", 0) == 0) {
+      pending_ += "STX#4#NAK#9#3#10#22#ETX\n";
+      return hmc::Done{};
+    }
+    return inner_->write(bytes);
+  }
+  hmc::Result<std::string> read(Millis timeout) override {
+    if (pending_.empty()) {
+      auto got = inner_->read(timeout);
+      if (!got) return got;
+      partial_ += got.value();
+      for (size_t end; (end = partial_.find('\n')) != std::string::npos; partial_.erase(0, end + 1)) {
+        pending_ += rewrite(partial_.substr(0, end));
+      }
+    }
+    return std::exchange(pending_, std::string());
+  }
+  std::string description() const override { return "protocol 2 test board"; }
+  std::vector<std::string> writes;
+
+ private:
+  static std::string rewrite(const std::string& line) {
+    auto frame = hmc::decode_board_frame(line);
+    if (!frame) return line + "\n";
+    if (std::holds_alternative<hmc::ResetEvent>(*frame)) return "";
+    if (auto* v = std::get_if<hmc::Version>(&*frame)) v->protocol = 2;
+    if (auto* b = std::get_if<hmc::Booted>(&*frame)) b->protocol = 2;
+    return hmc::encode_board_frame(*frame).value() + "\n";
+  }
+  std::unique_ptr<hmc::Transport> inner_;
+  std::string partial_, pending_;
+};
+
 }  // namespace
+
+TEST_CASE("the reset cause comes with the board's state; a board predating it is told to reflash") {
+  {
+    StateDir dir;
+    auto s = open("sim://?fast");
+    CHECK(s->supports(hmc::proto::Feature::kResetCause));
+    REQUIRE(s->model().last_reset.has_value());
+    CHECK(s->model().last_reset->cause == hmc::proto::ResetCause::kPowerOn);
+    auto reply = s->execute(hmc::StatusQuery{hmc::proto::kUnitReset});
+    REQUIRE(reply.ok());
+    REQUIRE(std::holds_alternative<hmc::ResetStatus>(reply.value()));
+    CHECK(hmc::describe(reply.value()) == "last reset: power-on");
+  }
+  StateDir dir;
+  auto raw = new Protocol2Transport(sim("sim://?fast"));
+  auto opened = Session::open(std::unique_ptr<hmc::Transport>(raw), {});
+  REQUIRE(opened.ok());  // no decode error, no NAK: the host never asked what it lacks
+  auto& s = opened.value();
+  CHECK(s->version()->protocol == 2);
+  CHECK_FALSE(s->supports(hmc::proto::Feature::kResetCause));
+  CHECK_FALSE(s->model().last_reset.has_value());
+  for (const std::string& line : raw->writes) CHECK(line.rfind("STX#2#STA#8#", 0) == std::string::npos);
+  const size_t sent = raw->writes.size();
+  auto reply = s->execute(hmc::StatusQuery{hmc::proto::kUnitReset});
+  REQUIRE_FALSE(reply.ok());
+  CHECK(reply.error().kind == SessionError::Kind::kTooOld);
+  CHECK(reply.error().message ==
+        "the board's firmware is too old for this: reflash (the reset cause and fault record (EVR, STA 8) needs "
+        "protocol 4; the board speaks protocol 2)");
+  CHECK(raw->writes.size() == sent);
+}
 
 TEST_CASE("a v2 board is detected and its state read") {
   StateDir dir;
