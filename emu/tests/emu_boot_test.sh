@@ -40,8 +40,9 @@ check_match() {
 }
 
 ver='STX#1#VER#0#ETX'
-boot_out="STX#3#EVB#2#100#102#ETX
-STX#9#VER#2#100#0#128#50000#322#3#0#123#ETX"
+boot_out="STX#3#EVB#4#100#104#ETX
+STX#6#EVR#1#0#0#0#0#1#ETX
+STX#9#VER#4#100#0#128#50000#322#3#0#125#ETX"
 for image in hmc-firmware hmc-firmware-nobl; do
   for clock in "" --no-crystal; do
     name="$image${clock:+ $clock}"
