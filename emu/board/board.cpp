@@ -8,11 +8,12 @@
 #include "../chip/chip.h"
 #include "../chip/port.h"
 #include "samd21_board_map.h"
+#include "sim_board.h"
 
 namespace hmc::emu {
 namespace {
 
-namespace map = hmc::samd21::board;
+namespace pinmap = hmc::samd21::board;
 
 bool bit(uint32_t word, unsigned n) { return (word & (1u << n)) != 0; }
 
@@ -23,18 +24,41 @@ constexpr std::array<uint16_t, 8> kDrvReset = {0xC10, 0x1FF, 0x030, 0x080,
 
 }  // namespace
 
+// The axes are hmc-sim's (sim_board.h, SimConfig): motors 1-2 start mid-travel with limit
+// switches at both ends; motor 3 has none.
+const std::array<sim::AxisConfig, 3> kAxes = sim::SimConfig{}.axes;
+
 Board::Board(Chip& chip) : chip_(chip) {
   for (Drv8711& d : drivers_) d.regs = kDrvReset;
+  for (unsigned m = 0; m < 3; ++m) axes_[m].position = kAxes[m].start;
+}
+
+void Board::drive_switch(unsigned motor, unsigned end, bool pressed) {
+  if (motor >= 2 || axes_[motor].pressed[end] == pressed) return;
+  axes_[motor].pressed[end] = pressed;
+  const pinmap::SwitchPin& sw = pinmap::kLimits[motor][end];
+  chip_.port().drive(sw.pin.group, sw.pin.number, pressed ? (sw.active_low ? 0 : 1) : -1);
+}
+
+void Board::update_limits(unsigned motor) {
+  if (!kAxes[motor].has_switches) return;
+  drive_switch(motor, 0, axes_[motor].position <= kAxes[motor].low_switch);
+  drive_switch(motor, 1, axes_[motor].position >= kAxes[motor].high_switch);
 }
 
 void Board::outputs_changed(unsigned group, uint32_t before, uint32_t after) {
   for (unsigned m = 0; m < 3; ++m) {
-    const map::DriverPins& pins = map::kDrivers[m];
+    const pinmap::DriverPins& pins = pinmap::kDrivers[m];
     if (pins.step.group == group && !bit(before, pins.step.number) &&
         bit(after, pins.step.number)) {
       const bool reverse = chip_.port().level(pins.dir.group, pins.dir.number);
-      axes_[m].position += reverse ? -1 : 1;
+      // DRV8711 CTRL.MODE (bits 6:3): 2^MODE microsteps per full step (7.6.1), so one STEP
+      // edge moves 256 >> MODE in 1/256 step.
+      const unsigned mode = (drivers_[m].regs[0] >> 3) & 0xF;
+      const int64_t delta = mode <= 8 ? (256 >> mode) : 1;
+      axes_[m].position += reverse ? -delta : delta;
       ++axes_[m].steps;
+      update_limits(m);
     }
     if (pins.cs.group == group && bit(before, pins.cs.number) && !bit(after, pins.cs.number)) {
       Drv8711& d = drivers_[m];
@@ -52,15 +76,15 @@ void Board::outputs_changed(unsigned group, uint32_t before, uint32_t after) {
 
 uint8_t Board::spi_exchange(unsigned sercom, uint8_t mosi) {
   for (unsigned s = 0; s < 2; ++s) {
-    if (map::kLedStrips[s].sercom == sercom) {
+    if (pinmap::kLedStrips[s].sercom == sercom) {
       strip_bytes_[s].push_back(mosi);
       return 0;
     }
   }
-  if (sercom != map::driver_spi::kSercom) return 0;
+  if (sercom != pinmap::driver_spi::kSercom) return 0;
   Drv8711* selected = nullptr;
   for (unsigned m = 0; m < 3; ++m) {
-    const map::Pin cs = map::kDrivers[m].cs;
+    const pinmap::Pin cs = pinmap::kDrivers[m].cs;
     if (chip_.port().level(cs.group, cs.number)) {
       if (selected != nullptr) return 0;  // two chips selected: both drive MISO; read as 0
       selected = &drivers_[m];
@@ -81,12 +105,12 @@ uint8_t Board::spi_exchange(unsigned sercom, uint8_t mosi) {
 }
 
 bool Board::set_switch(const std::string& name, bool pressed) {
-  const map::SwitchPin* sw = nullptr;
-  if (name == "emergency") sw = &map::kEmergency;
-  if (name == "limit1-") sw = &map::kLimits[0][0];
-  if (name == "limit1+") sw = &map::kLimits[0][1];
-  if (name == "limit2-") sw = &map::kLimits[1][0];
-  if (name == "limit2+") sw = &map::kLimits[1][1];
+  const pinmap::SwitchPin* sw = nullptr;
+  if (name == "emergency") sw = &pinmap::kEmergency;
+  if (name == "limit1-") sw = &pinmap::kLimits[0][0];
+  if (name == "limit1+") sw = &pinmap::kLimits[0][1];
+  if (name == "limit2-") sw = &pinmap::kLimits[1][0];
+  if (name == "limit2+") sw = &pinmap::kLimits[1][1];
   if (sw == nullptr) return false;
   // A pressed switch drives its pin to its active level; released, the pin is left to its pull.
   chip_.port().drive(sw->pin.group, sw->pin.number, pressed ? (sw->active_low ? 0 : 1) : -1);

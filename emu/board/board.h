@@ -16,8 +16,9 @@ class Chip;
 class Board {
  public:
   struct Axis {
-    int64_t position = 0;  // microsteps, forward positive
+    int64_t position = 0;  // 1/256 step, forward positive (hmc-sim's unit)
     uint64_t steps = 0;    // STEP rising edges seen
+    bool pressed[2] = {false, false};  // limit switch at end 0 (reverse), end 1 (forward)
   };
   struct Drv8711 {
     std::array<uint16_t, 8> regs{};
@@ -41,6 +42,9 @@ class Board {
   std::vector<uint8_t> take_strip_bytes(unsigned strip);
 
  private:
+  void update_limits(unsigned motor);
+  void drive_switch(unsigned motor, unsigned end, bool pressed);
+
   Chip& chip_;
   std::array<Axis, 3> axes_{};
   std::array<Drv8711, 3> drivers_{};
