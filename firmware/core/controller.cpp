@@ -79,10 +79,12 @@ void Controller::boot() {
 }
 
 void Controller::poll() {
+  scheduler_.fill();
   check_switches();
   for (int byte = board_.serial.read_byte(); byte >= 0; byte = board_.serial.read_byte()) {
     if (parser_.feed(static_cast<uint8_t>(byte))) handle_line(parser_.verdict());
   }
+  scheduler_.fill();
   check_motions();
   const hal::Ticks now = board_.timer.now();
   check_drivers(now);

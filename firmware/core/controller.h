@@ -107,6 +107,8 @@ class Controller {
   void poll();
   // The step timer's interrupt.
   void on_step_timer() { scheduler_.on_step_timer(); }
+  // What the board's own step interrupt plays (step_engine.h), instead of on_step_timer().
+  StepEngine& step_engine() { return scheduler_.engine(); }
   // The switches' interrupt: halts a motor moving toward a switch that closed, or all of them
   // on the emergency switch. The main loop then finishes the bookkeeping.
   void on_switch_change();
