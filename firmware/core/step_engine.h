@@ -200,37 +200,30 @@ void run_step_interrupt(StepEngine& e, Port& port, uint32_t now) {
     take_requests(e);
   }
   for (;;) {
+    // The motors due now: which step, which only change DIR or wait.
     uint8_t due = 0;
+    uint8_t steps = 0;
     for (uint8_t i = 0; i < 3; ++i) {
       const StepLane& lane = e.lanes[i];
-      if (lane.armed != 0 && static_cast<int32_t>(lane.next - now) <= 0) due |= uint8_t(1u << i);
+      if (lane.armed == 0 || static_cast<int32_t>(lane.next - now) > 0) continue;
+      due |= uint8_t(1u << i);
+      if ((lane.flags & (kSegDir | kSegNoStep)) == 0) {
+        steps |= uint8_t(1u << i);
+      } else if ((lane.flags & kSegDir) != 0) {
+        port.set_dir(i, (lane.flags & kSegReverse) != 0);
+      }
     }
-    if (due != 0) {
-      uint8_t steps = 0;
-      for (uint8_t i = 0; i < 3; ++i) {
-        if ((due & (1u << i)) == 0) continue;
-        const uint8_t flags = e.lanes[i].flags;
-        if ((flags & kSegDir) != 0) {
-          port.set_dir(i, (flags & kSegReverse) != 0);
-        } else if ((flags & kSegNoStep) == 0) {
-          steps |= uint8_t(1u << i);
-        }
-      }
-      uint32_t since = 0;
-      if (steps != 0) {
-        port.step_high(steps);
-        since = port.pulse_started();
-      }
-      for (uint8_t i = 0; i < 3; ++i) {
-        if ((due & (1u << i)) != 0) advance(e, e.lanes[i]);
-      }
-      if (steps != 0) port.step_low(steps, since);
+    uint32_t since = 0;
+    if (steps != 0) {
+      port.step_high(steps);
+      since = port.pulse_started();
     }
-    // The earliest event left.
+    // While the pulse is high: each due motor's next event, and the earliest event left.
     int32_t best = 0x7FFFFFFF;
     uint32_t when = 0;
     for (uint8_t i = 0; i < 3; ++i) {
-      const StepLane& lane = e.lanes[i];
+      StepLane& lane = e.lanes[i];
+      if ((due & (1u << i)) != 0) advance(e, lane);
       if (lane.armed == 0) continue;
       const int32_t d = static_cast<int32_t>(lane.next - now);
       if (d < best) {
@@ -238,6 +231,7 @@ void run_step_interrupt(StepEngine& e, Port& port, uint32_t now) {
         when = lane.next;
       }
     }
+    if (steps != 0) port.step_low(steps, since);
     if (best == 0x7FFFFFFF) return;  // nothing armed
     // Time has passed since entry (the pulses above, at least): compare what is left.
     if (best - static_cast<int32_t>(port.elapsed()) >= static_cast<int32_t>(Port::kCostTicks)) {

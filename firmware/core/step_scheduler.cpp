@@ -43,7 +43,10 @@ constexpr uint8_t kPushRoom = 4;
 }  // namespace
 
 StepScheduler::StepScheduler(hal::StepTimer& timer, hal::StepPins& pins, Ticks handover_lead)
-    : timer_(timer), pins_(pins), lead_(handover_lead), clamped_(0), engine_{}, motors_{} {
+    : timer_(timer),
+      pins_(pins),
+      lead_(handover_lead > 0xFFFFFFFFu ? 0xFFFFFFFFu : static_cast<uint32_t>(handover_lead)),
+      clamped_(0), engine_{}, motors_{} {
   for (Motor& mo : motors_) {
     mo.active = kNoSlot;
     mo.then_slot = kNoSlot;
@@ -126,8 +129,7 @@ StepStatus StepScheduler::plan_and_post(uint8_t motor, const MoveSpec* move) {
   const int32_t into = static_cast<int32_t>(load(lane.total) - mo.profile_base);
   const uint32_t last_interval = load(lane.last_interval);
   const uint32_t spacing = last_interval > kMinIntervalTicks ? last_interval : kMinIntervalTicks;
-  uint32_t h = static_cast<uint32_t>(into > 0 ? into : 0) + 2 +
-               static_cast<uint32_t>(lead_ / spacing);
+  uint32_t h = static_cast<uint32_t>(into > 0 ? into : 0) + 2 + lead_ / spacing;
   if (h < mo.planned) h = mo.planned;
   if (!current.endless && h > current.total_steps) {
     // The move ends before the handover: what follows starts from rest after it.
@@ -200,18 +202,18 @@ void StepScheduler::push(uint8_t index, const StepSegment& seg) {
 // the one after the step it makes) and the lead's worth at the current interval.
 uint32_t StepScheduler::steps_ahead_allowed(const Motor& mo) const {
   const uint32_t spacing = mo.last_delta > kMinIntervalTicks ? mo.last_delta : kMinIntervalTicks;
-  return 2 + static_cast<uint32_t>(lead_ / spacing);
+  return 2 + lead_ / spacing;
 }
 
-// Tops the ring up to the steps allowed ahead, once it has fallen to half of them (so a cruise
-// goes in as runs of many steps), or earlier when the ring has room and a ramp is playing.
+// Tops the ring up to the steps allowed ahead once it has fallen to half of them, so a cruise
+// goes in as runs of many steps (a ramp, one segment a step, is held back by the ring's size).
 void StepScheduler::produce(uint8_t index) {
   Motor& mo = motors_[index];
   const StepLane& lane = engine_.lanes[index];
   bool pushed = false;
   const uint32_t allowed = steps_ahead_allowed(mo);
   uint32_t ahead = mo.pushed - load(lane.total);
-  if (ahead >= 2 && ahead > allowed / 2 && space(index) < kRingSize / 2) return;
+  if (ahead >= 2 && ahead > allowed / 2) return;
   while (mo.active != kNoSlot && space(index) >= kPushRoom && ahead < allowed) {
     if (mo.next_slot != kNoSlot && mo.planned >= mo.switch_at) {  // the replacement's turn
       mo.then_slot = mo.next_then;

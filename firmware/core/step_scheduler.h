@@ -163,7 +163,7 @@ class StepScheduler {
 
   hal::StepTimer& timer_;
   hal::StepPins& pins_;
-  hal::Ticks lead_;
+  uint32_t lead_;  // ticks (a 32-bit division on the M0+ is a short helper; 64-bit is long)
   uint32_t clamped_;
   StepEngine engine_;
   Motor motors_[kMotors];
