@@ -677,3 +677,70 @@ TEST_CASE("queries and refusals") {
   CHECK(bench.rises(3).empty());
   CHECK(!bench.sched.is_running(3));
 }
+
+TEST_CASE("the fastest and slowest rates, and three motors at the spec's 20 us for a second") {
+  SECTION("three motors at 20 us: 50 000 steps each in one second, every one on its grid") {
+    Bench bench(StepScheduler::kDefaultHandoverLead);
+    for (uint8_t m = 1; m <= 3; ++m) {
+      REQUIRE(bench.sched.start(m, move(false, 0, 960, 0, 8)) == StepStatus::kOk);
+    }
+    bench.run_until(48000000 + 100);
+    for (uint8_t m = 1; m <= 3; ++m) {
+      const std::vector<Ticks> rises = bench.rises(m);
+      REQUIRE(rises.size() >= 50000);
+      for (size_t i = 0; i < 50000; ++i) REQUIRE(rises[i] == 960 * (i + 1));
+      CHECK(bench.rises(m, 960).size() - bench.rises(m, 960 + 48000000).size() == 50000);
+    }
+    bench.sched.halt_all();
+    bench.run_out();
+    check_pulses(bench);
+  }
+  SECTION("the shortest interval (5 us) on three motors at once, ramping and constant") {
+    Bench bench(StepScheduler::kDefaultHandoverLead);
+    REQUIRE(bench.sched.start(1, move(false, 20000, 240, 0)) == StepStatus::kOk);
+    REQUIRE(bench.sched.start(2, move(true, 20000, 240, 4000000)) == StepStatus::kOk);
+    REQUIRE(bench.sched.start(3, move(false, 20000, 240, 1000000, 256)) == StepStatus::kOk);
+    bench.run_out();
+    const std::vector<Ticks> r1 = bench.rises(1);
+    REQUIRE(r1.size() == 20000);
+    for (size_t i = 0; i < r1.size(); ++i) REQUIRE(r1[i] == 240 * (i + 1));
+    CHECK(worst_error(bench.rises(2), 0, Ideal(4000000, 240, 20000)) <= kTolerance);
+    CHECK(worst_error(bench.rises(3), 0, Ideal(1000000, 240, 20000)) <= kTolerance);
+    check_pulses(bench);
+  }
+  SECTION("the slowest (89 s a step): waits without a step between, steps exact") {
+    Bench bench;
+    const uint32_t interval = 4272000000u;  // 89 s, beyond 2^31 ticks
+    REQUIRE(bench.sched.start(3, move(false, 3, interval, 0)) == StepStatus::kOk);
+    bench.run_out();
+    const std::vector<Ticks> rises = bench.rises(3);
+    REQUIRE(rises.size() == 3);
+    for (size_t i = 0; i < 3; ++i) CHECK(rises[i] == Ticks{interval} * (i + 1));
+    CHECK(bench.sched.position(3) == 3 * 256);
+    CHECK(bench.sched.last_end(3) == MoveEnd::kCompleted);
+    check_pulses(bench);
+  }
+}
+
+TEST_CASE("replacements at every point of a cruise run stay on the ideal profile") {
+  // With a lead the ring takes a cruise in runs of up to the lead's steps; a replacement may come
+  // at any step of a run (its first, last, or between) and must still hand over exactly.
+  const uint32_t interval = 2400;
+  const uint32_t a = 20000;
+  for (Ticks at = 60000000; at < 60000000 + 24 * interval; at += interval / 2 + 7) {
+    Bench bench(48000);
+    REQUIRE(bench.sched.start(1, move(false, 0, interval, a)) == StepStatus::kOk);
+    bench.run_until(at);
+    REQUIRE(bench.sched.start(1, move(false, 40000, 1200, a)) == StepStatus::kOk);
+    bench.run_out();
+    const std::vector<Ticks> rises = bench.rises(1);
+    REQUIRE(rises.size() > 40000);
+    const size_t h = rises.size() - 40000;  // the replacement makes exactly its 40 000 steps
+    INFO("replaced at tick " << at << ", handover step " << h);
+    const Ideal before(a, interval, 0);
+    CHECK(worst_error(std::vector<Ticks>(rises.begin(), rises.begin() + static_cast<long>(h)), 0, before) <= kTolerance);
+    const Ideal after(a, 1200, 40000, before.speed(static_cast<long double>(h)));
+    CHECK(worst_error(std::vector<Ticks>(rises.begin() + static_cast<long>(h), rises.end()), rises[h - 1], after) <= kTolerance);
+    check_pulses(bench);
+  }
+}
