@@ -40,6 +40,8 @@ Ticks later(Ticks a, Ticks b) { return a > b ? a : b; }
 // Segments a push may take: a split wait, the step segment, an end marker, a DIR start.
 constexpr uint8_t kPushRoom = 4;
 
+constexpr uint32_t kOverdueTicks = 48000;  // 1 ms
+
 }  // namespace
 
 StepScheduler::StepScheduler(hal::StepTimer& timer, hal::StepPins& pins, Ticks handover_lead)
@@ -177,12 +179,20 @@ void StepScheduler::sync(uint8_t index) {
   mo.pushed = load(lane.total);
 }
 
+// Also the guard of a compare written too late to match (the interrupt delayed past its own
+// cost estimate): an event overdue by kOverdueTicks has the interrupt run at once, instead of
+// waiting for the counter to come round (89 s).
 void StepScheduler::fill() {
+  const uint32_t now = static_cast<uint32_t>(timer_.now());
   for (uint8_t index = 0; index < kMotors; ++index) {
     sync(index);
     produce(index);
     const StepLane& lane = engine_.lanes[index];
-    if (load8(lane.head) != lane.tail && load8(lane.armed) == 0) wake(index);
+    if (load8(lane.armed) == 0) {
+      if (load8(lane.head) != lane.tail) wake(index);
+    } else if (static_cast<int32_t>(now - load(lane.next)) > static_cast<int32_t>(kOverdueTicks)) {
+      kick();
+    }
   }
 }
 
