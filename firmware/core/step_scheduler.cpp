@@ -53,6 +53,7 @@ StepScheduler::StepScheduler(hal::StepTimer& timer, hal::StepPins& pins, Ticks h
     mo.active = kNoSlot;
     mo.then_slot = kNoSlot;
     mo.next_slot = kNoSlot;
+    mo.next_then = kNoSlot;
     mo.phase = kNoSlot;
   }
 }
@@ -75,6 +76,9 @@ StepStatus StepScheduler::plan_and_post(uint8_t motor, const MoveSpec* move) {
   sync(index);
   Motor& mo = motors_[index];
   const Ticks now = timer_.now();
+  // A replacement not yet reached is itself replaced: plan against the active profile.
+  mo.next_slot = kNoSlot;
+  mo.next_then = kNoSlot;
   uint8_t free[2] = {kNoSlot, kNoSlot};
   for (uint8_t slot = 0, found = 0; slot < kSlots && found < 2; ++slot) {
     if (slot != mo.active && slot != mo.then_slot && slot != mo.next_slot) free[found++] = slot;
@@ -93,10 +97,6 @@ StepStatus StepScheduler::plan_and_post(uint8_t motor, const MoveSpec* move) {
     return from_plan(status);
   }
 
-  if (mo.next_slot != kNoSlot) {  // a replacement not yet reached: this one replaces it
-    mo.next_slot = kNoSlot;
-    mo.then_slot = kNoSlot;
-  }
   const Profile& current = mo.slots[mo.active];
   const bool same_way = move != nullptr && move->reverse == current.spec.reverse;
   if (!same_way && current.k == 0) {  // constant rate: stop at once
@@ -111,7 +111,9 @@ StepStatus StepScheduler::plan_and_post(uint8_t motor, const MoveSpec* move) {
     const StepLane& lane = engine_.lanes[index];
     mo.pushed_position = load(lane.position);
     mo.pushed = load(lane.total);
-    mo.last_rise = now - static_cast<uint32_t>(static_cast<uint32_t>(now) - load(lane.last_step));
+    // (A start's anchor counts as its last step, and may still be ahead of `now`.)
+    const int32_t since_step = static_cast<int32_t>(static_cast<uint32_t>(now) - load(lane.last_step));
+    mo.last_rise = static_cast<Ticks>(static_cast<int64_t>(now) - since_step);
     if (move != nullptr) {
       begin_from_rest(index, free[0], now);
       produce(index);
@@ -174,6 +176,7 @@ void StepScheduler::sync(uint8_t index) {
   mo.active = kNoSlot;
   mo.then_slot = kNoSlot;
   mo.next_slot = kNoSlot;
+  mo.next_then = kNoSlot;
   mo.move_mark = false;
   mo.pushed_position = load(lane.position);
   mo.pushed = load(lane.total);
@@ -311,6 +314,8 @@ void StepScheduler::finish(uint8_t index) {
   const Profile& profile = mo.slots[mo.active];
   const MoveEnd end = profile.stopping ? MoveEnd::kStopped : MoveEnd::kCompleted;
   mo.active = kNoSlot;
+  mo.next_slot = kNoSlot;  // a replacement for a step this profile never reached
+  mo.next_then = kNoSlot;
   if (mo.then_slot != kNoSlot) {
     push(index, StepSegment{0, 0, 0, kSegEnd, static_cast<uint8_t>(MoveEnd::kNone)});
     const uint8_t slot = mo.then_slot;

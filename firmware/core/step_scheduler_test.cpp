@@ -744,3 +744,25 @@ TEST_CASE("replacements at every point of a cruise run stay on the ideal profile
     check_pulses(bench);
   }
 }
+
+TEST_CASE("a replacement replaced before its handover step: only the last one plays") {
+  // Found by the controller fuzzer: a motor braking for a reverse holds two profiles (the brake
+  // and the move after it), a move in the braking direction waits for its handover as a third;
+  // a fourth command before that handover must still find room for its two.
+  const uint32_t a = 20000;
+  Bench bench(48000);
+  REQUIRE(bench.sched.start(1, move(false, 0, 2400, a)) == StepStatus::kOk);
+  bench.run_until(60000000);
+  REQUIRE(bench.sched.start(1, move(true, 100, 2400, a)) == StepStatus::kOk);
+  bench.run_until(60000000 + 4800000);  // braking for the reverse
+  REQUIRE(bench.sched.start(1, move(false, 40000, 1200, a)) == StepStatus::kOk);
+  REQUIRE(bench.sched.start(1, move(false, 40000, 1200, a)) == StepStatus::kOk);
+  bench.run_out();
+  CHECK(bench.dir_edges(1).size() == 1);  // never reversed
+  const std::vector<Ticks> rises = bench.rises(1);
+  REQUIRE(rises.size() > 40000);
+  CHECK(bench.sched.steps_done(1) == 40000);
+  CHECK(bench.sched.position(1) == static_cast<int32_t>(rises.size() * 256));
+  CHECK(bench.sched.last_end(1) == MoveEnd::kCompleted);
+  check_pulses(bench);
+}
