@@ -85,6 +85,7 @@ struct StepLane {
   uint32_t last_step;    // time of the last step
   uint32_t last_interval;  // between the last two steps, 0 at rest
   uint32_t finished;       // motions ended so far
+  uint32_t halts;          // halts taken (one may have dropped a DIR change)
   StepSegment ring[kRingSize];
 };
 
@@ -167,6 +168,7 @@ inline void take_requests(StepEngine& e) {
       lane.moving = 0;
       lane.armed = 0;
       lane.last_interval = 0;
+      ++lane.halts;
     }
     if (lane.armed == 0) load_segment(e, lane);
   }

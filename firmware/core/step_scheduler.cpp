@@ -107,6 +107,7 @@ StepStatus StepScheduler::plan_and_post(uint8_t motor, const MoveSpec* move) {
     post_halt(index, static_cast<uint8_t>(move == nullptr ? MoveEnd::kStopped : MoveEnd::kNone));
     mo.active = kNoSlot;
     mo.then_slot = kNoSlot;
+    mo.dir_known = false;  // the halt may drop a DIR change not yet made
     // The halt is taken before any event after `now`: the steps so far are all there will be.
     const StepLane& lane = engine_.lanes[index];
     mo.pushed_position = load(lane.position);
@@ -168,8 +169,13 @@ StepStatus StepScheduler::plan_and_post(uint8_t motor, const MoveSpec* move) {
 // lane moving before it advances `head`, so reading the ring first cannot see a false rest.)
 void StepScheduler::sync(uint8_t index) {
   Motor& mo = motors_[index];
-  if (mo.active == kNoSlot && mo.then_slot == kNoSlot) return;
   const StepLane& lane = engine_.lanes[index];
+  const uint32_t halts = load(lane.halts);
+  if (halts != mo.seen_halts) {  // a halt may have dropped a DIR change: the next start sets DIR
+    mo.seen_halts = halts;
+    mo.dir_known = false;
+  }
+  if (mo.active == kNoSlot && mo.then_slot == kNoSlot) return;
   const bool empty = load8(lane.head) == lane.tail;
   fence();
   if (!empty || load8(lane.moving) != 0) return;
@@ -278,7 +284,8 @@ void StepScheduler::begin_from_rest(uint8_t index, uint8_t slot, Ticks now) {
   const Profile& profile = mo.slots[slot];
   const bool reverse = profile.spec.reverse;
   const Ticks anchor =
-      mo.dir_known ? later(now, mo.last_rise + kStepHighTicks + kDirGuardTicks) : now;
+      mo.started ? later(now, mo.last_rise + kStepHighTicks + kDirGuardTicks) : now;
+  mo.started = true;
   uint8_t flags = kSegStart | kSegNoStep;
   if (!mo.dir_known || reverse != mo.dir_reverse) {
     flags = static_cast<uint8_t>(kSegStart | kSegDir | (reverse ? kSegReverse : 0));

@@ -133,7 +133,8 @@ class StepScheduler {
     uint32_t planned;       // steps of the active move pushed
     uint32_t pushed;        // steps pushed since power-up (wraps, as StepLane::total)
     uint32_t profile_base;  // `pushed` when the active profile began
-    uint32_t switch_at;     // with a next_slot: the active profile's last step before it
+    uint32_t switch_at;
+    uint32_t seen_halts;    // StepLane::halts when DIR was last known     // with a next_slot: the active profile's last step before it
     int32_t pushed_position;  // the position after every step pushed
     PhaseKind kind;
     uint8_t phase;
@@ -141,6 +142,7 @@ class StepScheduler {
     uint8_t then_slot;      // slot to start from rest when the active one ends
     uint8_t next_slot;      // slot replacing the active one after step switch_at, or kNoSlot
     uint8_t next_then;      // the then_slot that comes with it
+    bool started;           // a move has started since power-up (last_rise is meaningful)
     bool dir_known;
     bool dir_reverse;
     bool move_mark;         // the next step segment begins a replacing move
