@@ -114,7 +114,8 @@ StepStatus StepScheduler::plan_and_post(uint8_t motor, const MoveSpec* move) {
     mo.pushed = load(lane.total);
     // (A start's anchor counts as its last step, and may still be ahead of `now`.)
     const int32_t since_step = static_cast<int32_t>(static_cast<uint32_t>(now) - load(lane.last_step));
-    mo.last_rise = static_cast<Ticks>(static_cast<int64_t>(now) - since_step);
+    const int64_t last_rise = static_cast<int64_t>(now) - since_step;
+    mo.last_rise = last_rise > 0 ? static_cast<Ticks>(last_rise) : 0;
     if (move != nullptr) {
       begin_from_rest(index, free[0], now);
       produce(index);
