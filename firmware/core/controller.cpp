@@ -84,6 +84,7 @@ void Controller::boot(const ResetReport& reset) {
 }
 
 void Controller::poll() {
+  scheduler_.fill();
   check_switches();
   for (int byte = board_.serial.read_byte(); byte >= 0; byte = board_.serial.read_byte()) {
     // Every line end feeds the watchdog, a blank line's too: a bare LF is the host's keep-alive,
@@ -93,6 +94,7 @@ void Controller::poll() {
     }
     if (parser_.feed(static_cast<uint8_t>(byte))) handle_line(parser_.verdict());
   }
+  scheduler_.fill();
   check_motions();
   const hal::Ticks now = board_.timer.now();
   check_watchdog(now);

@@ -72,8 +72,9 @@ struct ControllerOptions {
 };
 
 // Sum of the commanded step rates of all moving motors the step interrupt is given, in steps/s.
-// The interrupt costs ≈ 750 cycles per step at constant rate and ≈ 1 170 with three motors
-// ramping (step_scheduler.h), so these keep it near 80 % of the 48 MHz M0+ at most.
+// Set from the two-interrupt scheduler's cost (≈ 750 cycles a step at constant rate, ≈ 1 170
+// with three motors ramping: near 80 % of the 48 MHz M0+ at these sums) and kept for the step
+// engine (step_engine.h) until its cost is measured in cycles (docs/performance.md).
 inline constexpr uint32_t kMaxStepRate = 50000;
 inline constexpr uint32_t kMaxRampingStepRate = 40000;  // when any moving motor ramps
 
@@ -121,6 +122,8 @@ class Controller {
   void poll();
   // The step timer's interrupt.
   void on_step_timer() { scheduler_.on_step_timer(); }
+  // What the board's own step interrupt plays (step_engine.h), instead of on_step_timer().
+  StepEngine& step_engine() { return scheduler_.engine(); }
   // The switches' interrupt: halts a motor moving toward a switch that closed, or all of them
   // on the emergency switch. The main loop then finishes the bookkeeping.
   void on_switch_change();

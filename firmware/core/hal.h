@@ -21,6 +21,9 @@ class StepTimer {
   virtual Ticks now() const = 0;
   // Asks for on_step_timer() (see StepScheduler) at `when`; a time already past fires at once.
   virtual void schedule(Ticks when) = 0;
+  // Called from the step interrupt: returns once the clock has reached `when` (the end of a
+  // STEP pulse, at most 2 µs away). The simulator's interrupt takes no time, so it only notes it.
+  virtual void wait_until(Ticks when) { (void)when; }
 };
 
 // STEP and DIR lines of the three drivers; motor is 1..3. Called from the step interrupt.

@@ -47,9 +47,10 @@
 namespace hmc::fw {
 
 inline constexpr uint64_t kStepTicksPerSecond = 48000000;
-// Ticks the STEP line stays high (2.5 µs; the DRV8711 needs 1.9 µs) and the shortest interval
-// a move may ask for: 2.5 µs high + 2.5 µs low = 5 µs, at most 200 000 steps/s.
-inline constexpr uint32_t kStepHighTicks = 120;
+// Ticks the STEP line stays high (2.0 µs; the DRV8711 needs 1.9 µs, SLVSC40 "Timing
+// Requirements"), timed inside the step interrupt, and the shortest interval a move may ask
+// for: 5 µs, at most 200 000 steps/s on one motor (the controller's budget bounds the sum).
+inline constexpr uint32_t kStepHighTicks = 96;
 inline constexpr uint32_t kMinIntervalTicks = 240;
 // The longest velocity time a ramp may have (T_v = v/a), and so the largest M.
 inline constexpr uint64_t kMaxRampTicks = uint64_t{1} << 30;

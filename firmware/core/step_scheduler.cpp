@@ -1,11 +1,16 @@
-// StepScheduler, main-loop side: plans moves and hands them to the interrupt through each
-// motor's request. Planning divides; the interrupt side (step_scheduler_isr.cpp) never does.
+// StepScheduler, main-loop side: plans moves, computes each step's exact time and pushes the
+// times into the rings the step interrupt plays (step_engine.h). Everything here runs in the
+// main loop except halt() and halt_all(), which may run in a switch interrupt.
+#include "step_math.h"
 #include "step_scheduler.h"
 
 namespace hmc::fw {
 namespace {
 
 using hal::Ticks;
+using step_engine_detail::fence;
+using step_engine_detail::load8;
+using step_engine_detail::store8;
 
 StepStatus from_plan(PlanStatus status) {
   switch (status) {
@@ -25,25 +30,31 @@ StepStatus from_plan(PlanStatus status) {
 
 bool is_motor(uint8_t motor) { return motor >= 1 && motor <= StepScheduler::kMotors; }
 
-// Tries to replace with a retry budget; each failed handover doubles the lead.
-constexpr int kAttempts = 8;
+template <typename T>
+T load(const T& x) {
+  return *static_cast<const volatile T*>(&x);
+}
+
+Ticks later(Ticks a, Ticks b) { return a > b ? a : b; }
+
+// Segments a push may take: a split wait, the step segment, an end marker, a DIR start.
+constexpr uint8_t kPushRoom = 4;
+
+constexpr uint32_t kOverdueTicks = 48000;  // 1 ms
 
 }  // namespace
 
 StepScheduler::StepScheduler(hal::StepTimer& timer, hal::StepPins& pins, Ticks handover_lead)
-    : timer_(timer), pins_(pins), lead_(handover_lead), clamped_(0), pending_(0), motors_{} {
-  uint8_t number = 0;
+    : timer_(timer),
+      pins_(pins),
+      lead_(handover_lead > 0xFFFFFFFFu ? 0xFFFFFFFFu : static_cast<uint32_t>(handover_lead)),
+      clamped_(0), engine_{}, motors_{} {
   for (Motor& mo : motors_) {
-    mo.number = ++number;
-    mo.profile = nullptr;
     mo.active = kNoSlot;
-    mo.queued = kNoSlot;
+    mo.then_slot = kNoSlot;
+    mo.next_slot = kNoSlot;
+    mo.next_then = kNoSlot;
     mo.phase = kNoSlot;
-    mo.request.kind = Ask::kNone;
-    mo.request.slot = kNoSlot;
-    mo.request.then_slot = kNoSlot;
-    mo.event = Event::kNone;
-    mo.event_at = kNever;
   }
 }
 
@@ -53,192 +64,406 @@ StepStatus StepScheduler::start(uint8_t motor, const MoveSpec& move) {
 
 StepStatus StepScheduler::stop(uint8_t motor) { return plan_and_post(motor, nullptr); }
 
-// Plans `move` (or a stop, when null) against what the motor is doing and posts it. The
-// request slot is withdrawn first, so the interrupt's state can change only by itself: by
-// firing steps, ending the move or a halt, which `gen` reveals.
+// Plans `move` (or a stop, when null) against what the motor's plan is doing at the handover
+// step (the first step not yet pushed) and fills its ring.
 StepStatus StepScheduler::plan_and_post(uint8_t motor, const MoveSpec* move) {
   if (!is_motor(motor)) return StepStatus::kBadMotor;
   if (move != nullptr) {
     const PlanStatus status = check_move(*move);
     if (status != PlanStatus::kOk) return from_plan(status);
   }
-  Motor& mo = motors_[motor - 1];
-  Ticks lead = lead_;
-  for (int attempt = 0; attempt < kAttempts; ++attempt) {
-    store(mo.request.kind, Ask::kNone);
-    fence();
-    const uint32_t gen = load(mo.gen);
-    const uint8_t active = load(mo.active);
-    const uint8_t queued = load(mo.queued);
-    const uint32_t planned = load(mo.planned);
-    const uint32_t last_interval = load(mo.interval);
-    if (load(mo.gen) != gen) continue;
-
-    uint8_t free[2] = {kNoSlot, kNoSlot};
-    for (uint8_t slot = 0, found = 0; slot < kSlots && found < 2; ++slot) {
-      if (slot != active && slot != queued) free[found++] = slot;
-    }
-    Profile& first = mo.slots[free[0]];
-    Profile& second = mo.slots[free[1]];
-
-    if (active == kNoSlot) {  // at rest, or a start not yet taken
-      if (move == nullptr) {
-        if (queued != kNoSlot) post(mo, Ask::kQueue, kNoSlot);
-        return StepStatus::kOk;
-      }
-      const PlanStatus status = plan_move(*move, 0, first);
-      if (status == PlanStatus::kOk) post(mo, Ask::kQueue, free[0]);
-      return from_plan(status);
-    }
-
-    const Profile& current = mo.slots[active];
-    const bool same_way = move != nullptr && move->reverse == current.spec.reverse;
-    if (!same_way && current.k == 0) {  // constant rate: stop at once
-      if (move == nullptr) {
-        post_halt(mo, MoveEnd::kStopped);
-        kick();
-        return StepStatus::kOk;
-      }
-      const PlanStatus status = plan_move(*move, 0, first);
-      if (status == PlanStatus::kOk) post(mo, Ask::kHaltThen, free[0]);
-      return from_plan(status);
-    }
-    if (!same_way && current.stopping) {  // already braking to rest: only what follows changes
-      PlanStatus status = PlanStatus::kOk;
-      if (move != nullptr) status = plan_move(*move, 0, first);
-      if (status == PlanStatus::kOk) post(mo, Ask::kQueue, move == nullptr ? kNoSlot : free[0]);
-      return from_plan(status);
-    }
-
-    const Ticks spacing = last_interval > kMinIntervalTicks ? last_interval : kMinIntervalTicks;
-    const uint32_t ahead = lead == 0 ? 0 : static_cast<uint32_t>(lead / spacing) + 1;
-    const uint32_t at_step = planned + ahead;
-    if (!current.endless && at_step > current.total_steps) {
-      // The move ends before the handover: what follows starts from rest after it.
-      PlanStatus status = PlanStatus::kOk;
-      if (move != nullptr) status = plan_move(*move, 0, first);
-      if (status == PlanStatus::kOk) post(mo, Ask::kQueue, move == nullptr ? kNoSlot : free[0]);
-      return from_plan(status);
-    }
-
-    uint64_t m = 0;
-    PlanStatus status = PlanStatus::kOk;
-    uint8_t then_slot = kNoSlot;
-    if (same_way) {
-      status = speed_at(current, at_step, *move, m);
-      if (status == PlanStatus::kOk) status = plan_move(*move, m, first);
-    } else {  // brake to rest, then start the reverse move (if any) from rest
-      status = speed_at(current, at_step, current.spec, m);
-      if (status == PlanStatus::kOk) status = plan_stop(current.spec, m, first);
-      if (status == PlanStatus::kOk && move != nullptr) {
-        status = plan_move(*move, 0, second);
-        then_slot = free[1];
-      }
-    }
-    if (status != PlanStatus::kOk) return from_plan(status);
-    if (post_replace(mo, gen, at_step, free[0], then_slot)) return StepStatus::kOk;
-    lead = lead * 2 + 4 * kMinIntervalTicks;
+  const uint8_t index = static_cast<uint8_t>(motor - 1);
+  sync(index);
+  Motor& mo = motors_[index];
+  const Ticks now = timer_.now();
+  // A replacement not yet reached is itself replaced: plan against the active profile.
+  mo.next_slot = kNoSlot;
+  mo.next_then = kNoSlot;
+  uint8_t free[2] = {kNoSlot, kNoSlot};
+  for (uint8_t slot = 0, found = 0; slot < kSlots && found < 2; ++slot) {
+    if (slot != mo.active && slot != mo.then_slot && slot != mo.next_slot) free[found++] = slot;
   }
-  return StepStatus::kBusy;
+  Profile& first = mo.slots[free[0]];
+  Profile& second = mo.slots[free[1]];
+  PlanStatus status = PlanStatus::kOk;
+
+  if (mo.active == kNoSlot) {  // at rest, or the ring plays the end of a finished move
+    if (move == nullptr) return StepStatus::kOk;
+    status = plan_move(*move, 0, first);
+    if (status == PlanStatus::kOk) {
+      begin_from_rest(index, free[0], now);
+      produce(index);
+    }
+    return from_plan(status);
+  }
+
+  const Profile& current = mo.slots[mo.active];
+  const bool same_way = move != nullptr && move->reverse == current.spec.reverse;
+  if (!same_way && current.k == 0) {  // constant rate: stop at once
+    if (move != nullptr) {
+      status = plan_move(*move, 0, first);
+      if (status != PlanStatus::kOk) return from_plan(status);
+    }
+    post_halt(index, static_cast<uint8_t>(move == nullptr ? MoveEnd::kStopped : MoveEnd::kNone));
+    mo.active = kNoSlot;
+    mo.then_slot = kNoSlot;
+    mo.dir_known = false;  // the halt may drop a DIR change not yet made
+    // The halt is taken before any event after `now`: the steps so far are all there will be.
+    const StepLane& lane = engine_.lanes[index];
+    mo.pushed_position = load(lane.position);
+    mo.pushed = load(lane.total);
+    // (A start's anchor counts as its last step, and may still be ahead of `now`.)
+    const int32_t since_step = static_cast<int32_t>(static_cast<uint32_t>(now) - load(lane.last_step));
+    const int64_t last_rise = static_cast<int64_t>(now) - since_step;
+    mo.last_rise = last_rise > 0 ? static_cast<Ticks>(last_rise) : 0;
+    if (move != nullptr) {
+      begin_from_rest(index, free[0], now);
+      produce(index);
+    }
+    kick();
+    return StepStatus::kOk;
+  }
+  if (!same_way && current.stopping) {  // already braking to rest: only what follows changes
+    if (move != nullptr) status = plan_move(*move, 0, first);
+    if (status == PlanStatus::kOk) mo.then_slot = move == nullptr ? kNoSlot : free[0];
+    return from_plan(status);
+  }
+
+  // The handover step h: the step after the next one (the next one's time is fixed), plus the
+  // steps the lead covers at the current interval; the ring never holds more than that.
+  const StepLane& lane = engine_.lanes[index];
+  const int32_t into = static_cast<int32_t>(load(lane.total) - mo.profile_base);
+  const uint32_t last_interval = load(lane.last_interval);
+  const uint32_t spacing = last_interval > kMinIntervalTicks ? last_interval : kMinIntervalTicks;
+  uint32_t h = static_cast<uint32_t>(into > 0 ? into : 0) + 2 + lead_ / spacing;
+  if (h < mo.planned) h = mo.planned;
+  if (!current.endless && h > current.total_steps) {
+    // The move ends before the handover: what follows starts from rest after it.
+    if (move != nullptr) status = plan_move(*move, 0, first);
+    if (status == PlanStatus::kOk) mo.then_slot = move == nullptr ? kNoSlot : free[0];
+    return from_plan(status);
+  }
+
+  uint64_t m = 0;
+  uint8_t then_slot = kNoSlot;
+  if (same_way) {
+    status = speed_at(current, h, *move, m);
+    if (status == PlanStatus::kOk) status = plan_move(*move, m, first);
+  } else {  // brake to rest, then start the reverse move (if any) from rest
+    status = speed_at(current, h, current.spec, m);
+    if (status == PlanStatus::kOk) status = plan_stop(current.spec, m, first);
+    if (status == PlanStatus::kOk && move != nullptr) {
+      status = plan_move(*move, 0, second);
+      then_slot = free[1];
+    }
+  }
+  if (status != PlanStatus::kOk) return from_plan(status);
+  mo.next_slot = free[0];
+  mo.next_then = then_slot;
+  mo.switch_at = h;
+  produce(index);
+  return StepStatus::kOk;
 }
 
-// Posts a replacement for step `at_step`. False when the interrupt had already fixed the time
-// of the step after it (or the move changed) before the request was visible: the request is
-// then withdrawn and the caller plans again.
-bool StepScheduler::post_replace(Motor& mo, uint32_t gen, uint32_t at_step, uint8_t slot,
-                                 uint8_t then_slot) {
-  mo.request.slot = slot;
-  mo.request.then_slot = then_slot;
-  mo.request.at_step = at_step;
+// Drops the plan of a motor the interrupt halted: a plan always has its start in the ring or
+// playing, so an empty ring and a lane at rest mean the halt took it. (The interrupt marks a
+// lane moving before it advances `head`, so reading the ring first cannot see a false rest.)
+void StepScheduler::sync(uint8_t index) {
+  Motor& mo = motors_[index];
+  const StepLane& lane = engine_.lanes[index];
+  const uint32_t halts = load(lane.halts);
+  if (halts != mo.seen_halts) {  // a halt may have dropped a DIR change: the next start sets DIR
+    mo.seen_halts = halts;
+    mo.dir_known = false;
+  }
+  if (mo.active == kNoSlot && mo.then_slot == kNoSlot) return;
+  const bool empty = load8(lane.head) == lane.tail;
   fence();
-  store(mo.request.kind, Ask::kReplace);
-  fence();
-  const uint32_t planned = load(mo.planned);
-  const uint32_t now_gen = load(mo.gen);
-  if (load(mo.request.kind) != Ask::kReplace) return true;  // taken (or cleared by a halt)
-  if (planned <= at_step && now_gen == gen) return true;    // taken when that step falls
-  store(mo.request.kind, Ask::kNone);
-  return false;
+  if (!empty || load8(lane.moving) != 0) return;
+  mo.active = kNoSlot;
+  mo.then_slot = kNoSlot;
+  mo.next_slot = kNoSlot;
+  mo.next_then = kNoSlot;
+  mo.move_mark = false;
+  mo.pushed_position = load(lane.position);
+  mo.pushed = load(lane.total);
 }
 
-void StepScheduler::post(Motor& mo, Ask kind, uint8_t slot) {
-  mo.request.slot = slot;
+// Also the guard of a compare written too late to match (the interrupt delayed past its own
+// cost estimate): an event overdue by kOverdueTicks has the interrupt run at once, instead of
+// waiting for the counter to come round (89 s).
+void StepScheduler::fill() {
+  const uint32_t now = static_cast<uint32_t>(timer_.now());
+  for (uint8_t index = 0; index < kMotors; ++index) {
+    sync(index);
+    produce(index);
+    const StepLane& lane = engine_.lanes[index];
+    if (load8(lane.armed) == 0) {
+      if (load8(lane.head) != lane.tail) wake(index);
+    } else if (static_cast<int32_t>(now - load(lane.next)) > static_cast<int32_t>(kOverdueTicks)) {
+      kick();
+    }
+  }
+}
+
+uint8_t StepScheduler::space(uint8_t index) const {
+  const StepLane& lane = engine_.lanes[index];
+  return static_cast<uint8_t>(kRingSize - static_cast<uint8_t>(lane.tail - load8(lane.head)));
+}
+
+void StepScheduler::push(uint8_t index, const StepSegment& seg) {
+  StepLane& lane = engine_.lanes[index];
+  lane.ring[lane.tail & (kRingSize - 1)] = seg;
   fence();
-  store(mo.request.kind, kind);
-  store(pending_, uint8_t{1});
+  store8(lane.tail, static_cast<uint8_t>(lane.tail + 1));
+}
+
+// How many steps the ring may hold ahead of the interrupt: the next two (the interrupt needs
+// the one after the step it makes) and the lead's worth at the current interval.
+uint32_t StepScheduler::steps_ahead_allowed(const Motor& mo) const {
+  const uint32_t spacing = mo.last_delta > kMinIntervalTicks ? mo.last_delta : kMinIntervalTicks;
+  return 2 + lead_ / spacing;
+}
+
+// Tops the ring up to the steps allowed ahead once it has fallen to half of them, so a cruise
+// goes in as runs of many steps (a ramp, one segment a step, is held back by the ring's size).
+void StepScheduler::produce(uint8_t index) {
+  Motor& mo = motors_[index];
+  const StepLane& lane = engine_.lanes[index];
+  bool pushed = false;
+  const uint32_t allowed = steps_ahead_allowed(mo);
+  uint32_t ahead = mo.pushed - load(lane.total);
+  if (ahead >= 2 && ahead > allowed / 2) return;
+  while (mo.active != kNoSlot && space(index) >= kPushRoom && ahead < allowed) {
+    if (mo.next_slot != kNoSlot && mo.planned >= mo.switch_at) {  // the replacement's turn
+      mo.then_slot = mo.next_then;
+      begin_profile(mo, mo.next_slot, mo.last_rise);
+      mo.next_slot = kNoSlot;
+      mo.move_mark = true;
+    }
+    uint32_t most = allowed - ahead;
+    if (mo.next_slot != kNoSlot && mo.switch_at - mo.planned < most) most = mo.switch_at - mo.planned;
+    Ticks first = 0;
+    uint32_t count = 0;
+    if (!next_run(mo, most, first, count)) {
+      finish(index);
+      pushed = true;
+      continue;
+    }
+    if (first < mo.rise_ok_at) {
+      first = mo.rise_ok_at;
+      ++clamped_;
+    }
+    Ticks delta = first - mo.last_event;
+    if (delta > kMaxSegmentTicks) {  // a long wait: events without a step first
+      const Ticks waits = (delta - 1) / kMaxSegmentTicks;
+      push(index, StepSegment{kMaxSegmentTicks, static_cast<uint32_t>(waits), 0, kSegNoStep, 0});
+      delta -= waits * kMaxSegmentTicks;
+    }
+    const int16_t position_step = mo.slots[mo.active].position_step;
+    const uint8_t flags = mo.move_mark ? kSegMove : uint8_t{0};
+    push(index, StepSegment{static_cast<uint32_t>(delta), 1, position_step, flags, 0});
+    const uint32_t interval = count > 1 ? mo.cruise_interval : 0;
+    if (count > 1) push(index, StepSegment{interval, count - 1, position_step, 0, 0});
+    mo.move_mark = false;
+    mo.planned += count;
+    mo.pushed += count;
+    ahead += count;
+    mo.pushed_position += static_cast<int32_t>(count) * position_step;
+    mo.last_delta = static_cast<uint32_t>(count > 1 ? interval : (first - mo.last_rise));
+    mo.last_rise = first + static_cast<Ticks>(count - 1) * interval;
+    mo.last_event = mo.last_rise;
+    mo.rise_ok_at = mo.last_rise + kStepHighTicks + kStepLowTicks;
+    pushed = true;
+  }
+  if (pushed && load8(engine_.lanes[index].armed) == 0) wake(index);
+}
+
+// The first event of a move from rest: DIR when it changes, or a wait, at the anchor.
+void StepScheduler::begin_from_rest(uint8_t index, uint8_t slot, Ticks now) {
+  Motor& mo = motors_[index];
+  const Profile& profile = mo.slots[slot];
+  const bool reverse = profile.spec.reverse;
+  const Ticks anchor =
+      mo.started ? later(now, mo.last_rise + kStepHighTicks + kDirGuardTicks) : now;
+  mo.started = true;
+  uint8_t flags = kSegStart | kSegNoStep;
+  if (!mo.dir_known || reverse != mo.dir_reverse) {
+    flags = static_cast<uint8_t>(kSegStart | kSegDir | (reverse ? kSegReverse : 0));
+    mo.dir_known = true;
+    mo.dir_reverse = reverse;
+  }
+  push(index, StepSegment{static_cast<uint32_t>(anchor), 1, profile.position_step, flags, 0});
+  mo.last_event = anchor;
+  mo.rise_ok_at = later(mo.last_rise + kStepHighTicks + kStepLowTicks, anchor + kDirGuardTicks);
+  begin_profile(mo, slot, anchor);
+  mo.last_delta = profile.spec.interval;
+  mo.move_mark = false;
+}
+
+void StepScheduler::begin_profile(Motor& mo, uint8_t slot, Ticks anchor) {
+  const Profile& profile = mo.slots[slot];
+  mo.active = slot;
+  mo.k = profile.k;
+  mo.anchor = anchor;
+  mo.last_rise = anchor;
+  mo.planned = 0;
+  mo.profile_base = mo.pushed;
+  mo.phase = kNoSlot;
+  mo.kind = PhaseKind::kCruise;
+  mo.left = 0;
+}
+
+// The active profile has no step left: the motor is at rest at the ideal rest time. A move
+// waiting for it starts from rest; otherwise the motion ends.
+void StepScheduler::finish(uint8_t index) {
+  Motor& mo = motors_[index];
+  const Ticks rest = mo.kind == PhaseKind::kDown ? mo.base : mo.last_rise;
+  const Profile& profile = mo.slots[mo.active];
+  const MoveEnd end = profile.stopping ? MoveEnd::kStopped : MoveEnd::kCompleted;
+  mo.active = kNoSlot;
+  mo.next_slot = kNoSlot;  // a replacement for a step this profile never reached
+  mo.next_then = kNoSlot;
+  if (mo.then_slot != kNoSlot) {
+    push(index, StepSegment{0, 0, 0, kSegEnd, static_cast<uint8_t>(MoveEnd::kNone)});
+    const uint8_t slot = mo.then_slot;
+    mo.then_slot = kNoSlot;
+    begin_from_rest(index, slot, rest);
+    return;
+  }
+  push(index, StepSegment{0, 0, 0, kSegEnd, static_cast<uint8_t>(end)});
+}
+
+// The next run of steps of the active profile: its first step's time and how many steps (at
+// most `most`) follow at the cruise interval (1 outside a cruise); false at the profile's end.
+bool StepScheduler::next_run(Motor& mo, uint32_t most, Ticks& first, uint32_t& count) {
+  while (mo.left == 0) {
+    const Profile& profile = mo.slots[mo.active];
+    const uint8_t next = mo.phase == kNoSlot ? 0 : static_cast<uint8_t>(mo.phase + 1);
+    if (next >= profile.phase_count) return false;
+    const Phase& phase = profile.phases[next];
+    const Ticks reference = phase.from_last_step ? mo.last_rise : mo.anchor;
+    mo.phase = next;
+    mo.kind = phase.kind;
+    mo.left = phase.steps;
+    mo.base = reference + static_cast<Ticks>(phase.offset);
+    mo.cruise_interval = phase.interval;
+    mo.m = phase.m;
+    mo.root = phase.root;
+    mo.root_step = phase.root_step;
+    mo.g = phase.h == 0 ? 0 : 65536u - phase.h;
+  }
+  if (mo.kind == PhaseKind::kCruise) {
+    uint32_t run = most > 0 ? most : 1u;
+    if (mo.cruise_interval > kMaxSegmentTicks) run = 1;  // each step needs its own wait
+    if (mo.left != kEndless && run > mo.left) run = mo.left;
+    if (mo.left != kEndless) mo.left -= run;
+    first = mo.base;
+    count = run;
+    mo.base += static_cast<Ticks>(run) * mo.cruise_interval;
+    return true;
+  }
+  if (mo.left != kEndless) --mo.left;
+  count = 1;
+  uint32_t root = 0;
+  if (mo.kind == PhaseKind::kUp) {
+    mo.m += mo.k;
+    root = mo.root + mo.root_step;
+  } else {
+    mo.m -= mo.k;
+    root = mo.root_step <= mo.root ? mo.root - mo.root_step : 0;
+  }
+  int64_t rest = static_cast<int64_t>(mo.m) - static_cast<int64_t>(step_math::mul_u32(root, root));
+  step_math::settle_root(mo.m, root, rest);
+  const uint32_t q = root + ((mo.g != 0 && step_math::rounds_up(root, rest, mo.g)) ? 1u : 0u);
+  if (mo.kind == PhaseKind::kUp) {
+    mo.root_step = root - mo.root;
+    first = mo.base + q;
+  } else {
+    mo.root_step = mo.root - root;
+    first = mo.base - q;
+  }
+  mo.root = root;
+  return true;
+}
+
+// Has the interrupt take the motor's ring up (it waits, not armed).
+void StepScheduler::wake(uint8_t index) {
+  (void)index;
+  store8(engine_.pending, 1);
   kick();
 }
 
-// Has the interrupt run now: it takes requests before any due edge.
+// Has the interrupt run now: it takes requests before any due event.
 void StepScheduler::kick() { timer_.schedule(timer_.now()); }
 
-// Withdraws any request (a start not yet taken does not happen) and asks for a halt.
-void StepScheduler::post_halt(Motor& mo, MoveEnd end) {
-  store(mo.request.kind, Ask::kNone);
-  store(mo.halt_request, static_cast<uint8_t>(end));
-  store(pending_, uint8_t{1});
+// Asks the interrupt to drop the motor's ring as far as the main loop has filled it, and stop.
+void StepScheduler::post_halt(uint8_t index, uint8_t end) {
+  StepLane& lane = engine_.lanes[index];
+  store8(lane.halt_upto, load8(lane.tail));
+  fence();
+  store8(lane.halt_request, static_cast<uint8_t>(0x80u | end));
+  store8(engine_.pending, 1);
 }
 
 void StepScheduler::halt(uint8_t motor) {
   if (!is_motor(motor)) return;
-  post_halt(motors_[motor - 1], MoveEnd::kHalted);
+  post_halt(static_cast<uint8_t>(motor - 1), static_cast<uint8_t>(MoveEnd::kHalted));
   kick();
 }
 
 void StepScheduler::halt_all() {
-  for (Motor& mo : motors_) post_halt(mo, MoveEnd::kHalted);
+  for (uint8_t index = 0; index < kMotors; ++index) {
+    post_halt(index, static_cast<uint8_t>(MoveEnd::kHalted));
+  }
   kick();
 }
 
 bool StepScheduler::set_position(uint8_t motor, int32_t position) {
   if (!is_motor(motor) || is_running(motor)) return false;
-  store(motors_[motor - 1].position, position);
+  StepLane& lane = engine_.lanes[motor - 1];
+  *static_cast<volatile int32_t*>(&lane.position) = position;
+  motors_[motor - 1].pushed_position = position;
   return true;
 }
 
 bool StepScheduler::is_running(uint8_t motor) const {
   if (!is_motor(motor)) return false;
-  const Motor& mo = motors_[motor - 1];
-  const Ask kind = load(mo.request.kind);
-  if (kind == Ask::kHaltThen || (kind == Ask::kQueue && mo.request.slot != kNoSlot)) return true;
-  return load(mo.active) != kNoSlot || load(mo.queued) != kNoSlot;
+  const StepLane& lane = engine_.lanes[motor - 1];
+  if (load8(lane.head) != lane.tail) return true;
+  fence();
+  return load8(lane.moving) != 0;
 }
 
 int32_t StepScheduler::position(uint8_t motor) const {
-  return is_motor(motor) ? load(motors_[motor - 1].position) : 0;
+  return is_motor(motor) ? load(engine_.lanes[motor - 1].position) : 0;
 }
 
 uint32_t StepScheduler::steps_done(uint8_t motor) const {
-  return is_motor(motor) ? load(motors_[motor - 1].fired) : 0;
+  return is_motor(motor) ? load(engine_.lanes[motor - 1].fired) : 0;
 }
 
 bool StepScheduler::target(uint8_t motor, int32_t& out) const {
   if (!is_motor(motor)) return false;
   const Motor& mo = motors_[motor - 1];
-  // The interrupt may change the move between the reads; gen tells, and the read is retried.
-  for (int attempt = 0; attempt < kAttempts; ++attempt) {
-    const uint32_t gen = load(mo.gen);
-    fence();
-    const uint8_t active = load(mo.active);
-    const int32_t position = load(mo.position);
-    const uint32_t fired = load(mo.fired);
-    fence();
-    if (load(mo.gen) != gen) continue;
-    if (active == kNoSlot) {
-      out = position;
-      return true;
-    }
-    const Profile& profile = mo.slots[active];
-    if (profile.endless) return false;
-    const uint32_t left = profile.total_steps > fired ? profile.total_steps - fired : 0;
-    out = static_cast<int32_t>(position + static_cast<int64_t>(left) * profile.position_step);
+  const StepLane& lane = engine_.lanes[motor - 1];
+  if (!is_running(motor)) {
+    out = load(lane.position);
     return true;
   }
-  return false;
+  if (mo.active == kNoSlot) {
+    out = mo.pushed_position;
+    return true;
+  }
+  const Profile& profile = mo.slots[mo.active];
+  if (profile.endless) return false;
+  const uint32_t left = profile.total_steps > mo.planned ? profile.total_steps - mo.planned : 0;
+  out = static_cast<int32_t>(mo.pushed_position + static_cast<int64_t>(left) * profile.position_step);
+  return true;
 }
 
 uint32_t StepScheduler::interval(uint8_t motor) const {
-  return is_motor(motor) ? load(motors_[motor - 1].interval) : 0;
+  return is_motor(motor) ? load(engine_.lanes[motor - 1].last_interval) : 0;
 }
 
 uint32_t StepScheduler::rate(uint8_t motor) const {
@@ -247,13 +472,16 @@ uint32_t StepScheduler::rate(uint8_t motor) const {
 }
 
 uint32_t StepScheduler::finished(uint8_t motor) const {
-  return is_motor(motor) ? load(motors_[motor - 1].finished) : 0;
+  return is_motor(motor) ? load(engine_.lanes[motor - 1].finished) : 0;
 }
 
 MoveEnd StepScheduler::last_end(uint8_t motor) const {
-  return is_motor(motor) ? load(motors_[motor - 1].end) : MoveEnd::kNone;
+  return is_motor(motor) ? static_cast<MoveEnd>(load(engine_.lanes[motor - 1].end))
+                         : MoveEnd::kNone;
 }
 
 uint32_t StepScheduler::clamped_edges() const { return load(clamped_); }
+
+uint32_t StepScheduler::starved_events() const { return load(engine_.starved); }
 
 }  // namespace hmc::fw

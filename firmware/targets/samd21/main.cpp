@@ -1,7 +1,7 @@
 // The SAMD21 firmware's entry: wires the board's HAL objects (this directory) into fw::Board,
 // runs the Controller, and routes the three interrupts the firmware uses.
 //
-//   irq_tc4      step timer, priority 0   → Controller::on_step_timer()
+//   irq_tc4      step timer, priority 0   → the step engine's fast path (step_fast_path.h)
 //   irq_sercom5  command UART, priority 1 → receive ring / transmit ring
 //   irq_eic      switches, priority 2     → Controller::on_switch_change()
 //
@@ -21,6 +21,7 @@
 #include "serial_port.h"
 #include "servo_pwm.h"
 #include "spi_bus.h"
+#include "step_fast_path.h"
 #include "step_pins.h"
 #include "step_timer.h"
 #include "switches.h"
@@ -53,9 +54,7 @@ volatile samd21::ClockSource clock_source;
 
 }  // namespace
 
-extern "C" void irq_tc4() {
-  if (step_timer.take_interrupt()) controller.on_step_timer();
-}
+extern "C" void irq_tc4() { samd21::run_step_fast_path(step_timer, controller.step_engine()); }
 
 extern "C" void irq_sercom5() { serial_port.on_interrupt(); }
 

@@ -37,7 +37,11 @@ void StepTimer::start() {
   r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntOvf | tc::kIntMc0);
   r8(kTc + tc::kIntEnSet) = static_cast<uint8_t>(tc::kIntOvf | tc::kIntMc0);
   high_ = 0;
-  target_ = kNone;
+  armed_ = 0xFFFFFFFFu;
+  // SysTick free-running at the CPU clock, no interrupt: the step interrupt's stopwatch.
+  r32(systick::kRvr) = 0xFFFFFFu;
+  r32(systick::kCvr) = 0;
+  r32(systick::kCsr) = systick::kEnableCpuClock;
   nvic_set_priority(irqn::kTc4, board::kPriorityStepTimer);
   nvic_unpend(irqn::kTc4);
   nvic_enable(irqn::kTc4);
@@ -63,27 +67,32 @@ hal::Ticks StepTimer::now() const {
 
 void StepTimer::schedule(hal::Ticks when) {
   const uint32_t primask = irq_save();
-  target_ = when;
-  r32(kTc + tc::kCc0) = static_cast<uint32_t>(when);
-  sync();
-  r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntMc0);  // a stale match; see below
-  // The compare is live from here on. If the counter is already at or past `when`, it will not
-  // match (or matched before the flag was cleared): pend the interrupt instead.
-  if (now_masked() >= when) nvic_pend(irqn::kTc4);
+  if (now_masked() >= when) {
+    nvic_pend(irqn::kTc4);
+  } else {
+    arm(static_cast<uint32_t>(when));
+    if (now_masked() >= when) nvic_pend(irqn::kTc4);  // passed while the write synchronised
+  }
   irq_restore(primask);
 }
 
-bool StepTimer::take_interrupt() {
+void StepTimer::arm(uint32_t when) {
+  armed_ = when;
+  r32(kTc + tc::kCc0) = when;
+  sync();
+}
+
+uint32_t StepTimer::take_step_interrupt() {
   const uint32_t flags = r8(kTc + tc::kIntFlag) & (tc::kIntOvf | tc::kIntMc0);
   if ((flags & tc::kIntOvf) != 0) {
     r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntOvf);  // write 1 to clear
     high_ = high_ + 1u;
   }
-  if ((flags & tc::kIntMc0) != 0) r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntMc0);
-  const hal::Ticks target = target_;
-  if (target == kNone || now_masked() < target) return false;
-  target_ = kNone;
-  return true;
+  if ((flags & tc::kIntMc0) != 0) {
+    r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntMc0);
+    return armed_;
+  }
+  return read_count();
 }
 
 }  // namespace hmc::samd21
