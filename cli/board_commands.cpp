@@ -69,7 +69,12 @@ int wait_and_report(const GlobalOptions& g, Session& s, const std::vector<uint32
       how = std::string("ended early: ") + motion_end_name(*end);
     }
     if (motion == Motion::kStop) how = "stopped";
-    if (s.firmware() == Firmware::kSeed) how += " (timed: the seed firmware reports nothing)";
+    if (s.firmware() == Firmware::kSeed) {
+      // Nothing came back: say what was done, and where the motor should be if the board obeyed.
+      std::cout << "motor " << m << ": sent; the original firmware confirms nothing (if it obeyed, "
+                << (homing ? "it is homed, " : "") << position_words(motor) << ")\n";
+      continue;
+    }
     std::cout << "motor " << m << ": " << how << ", " << position_words(motor) << '\n';
   }
   if (g.json) std::cout << nlohmann::json{{"motors", out}} << '\n';

@@ -186,16 +186,20 @@ void Session::keep_alive_if_due() {
 SessionResult<std::unique_ptr<Session>> Session::open(std::unique_ptr<Transport> transport,
                                                        const SessionOptions& options) {
   std::unique_ptr<Session> session(new Session(std::move(transport), options));
-  if (options.firmware == FirmwareChoice::kSeed) {
+  if (options.firmware == FirmwareChoice::kSeed || session->transport_->seed_firmware()) {
     session->firmware_ = Firmware::kSeed;
     return session;
   }
   if (SessionResult<Done> detected = session->detect(); !detected) return detected.error();
-  if (session->firmware_ == Firmware::kSeed && options.firmware == FirmwareChoice::kV2) {
+  if (session->firmware_ == Firmware::kSeed) {
+    // Silence is never success: a wrong port, an unpowered board and a wrong baud rate are
+    // silent too. Only the user can say the board runs the original firmware.
     return make_error(SessionError::Kind::kNoReply,
-                      "no reply to VER from " + session->transport_->description() +
-                          " within " + std::to_string(kDetectTimeout.count()) +
-                          " ms: is the board powered, connected and at this baud rate?");
+                      "no reply to VER from " + session->transport_->description() + " within " +
+                          std::to_string(kDetectTimeout.count()) +
+                          " ms: this is not a board, or it is not powered, or not at this baud rate (--baud); or "
+                          "it runs the original (seed) firmware, which answers nothing: then say so with "
+                          "--firmware seed");
   }
   if (SessionResult<Done> refreshed = session->refresh(); !refreshed) return refreshed.error();
   return session;
