@@ -90,6 +90,14 @@ def run_cell(cell, board, during, args, want_exit, wording, after):
             moving = [m for m in status["motors"] if m["state"] != "idle"]
             if moving:
                 problems.append("motors still moving on the board: %s" % moving)
+        if after == "where-said":
+            time.sleep(0.6)
+            status = json.loads(control(cport, "status"))
+            for motor, steps, micro in re.findall(r"motor (\d) stopped at (-?\d+) steps of 1/(\d+)", text):
+                board_pos = status["motors"][int(motor) - 1]["pos"]
+                if int(steps) * 256 // int(micro) != board_pos or status["motors"][int(motor) - 1]["state"] != "idle":
+                    problems.append("motor %s: hmc says %s steps of 1/%s, the board rests at %d/256 (%s)" %
+                                    (motor, steps, micro, board_pos, status["motors"][int(motor) - 1]["state"]))
         if after == "fired":
             st = subprocess.run([hmc, "--port", port, "status", "--json"], capture_output=True, env=env, cwd=work)
             if not json.loads(st.stdout).get("watchdog", {}).get("fired"):

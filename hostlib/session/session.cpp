@@ -17,6 +17,8 @@ constexpr Millis kDetectTimeout{250};
 constexpr Millis kSlice{50};
 // While a motion runs and the board says nothing for this long, ask it (an event may be lost).
 constexpr Millis kStatusEvery{500};
+// Longest a stopped motor may brake before the host reports it as still moving.
+constexpr Millis kBrakeLimit{10000};
 // Seed firmware: how long the host assumes a homing without a step bound may take.
 constexpr Millis kSeedHomingTime{20000};
 
@@ -480,9 +482,19 @@ SessionResult<Done> Session::stop_all() {
     if (!reply) return reply.error();
   }
   if (firmware_ == Firmware::kV2) {
-    // The motors' final positions arrive as events right after the replies.
     for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
       if (SessionResult<BoardFrame> status = execute(StatusQuery{m}); !status) return status.error();
+    }
+    // A motor with an acceleration brakes: its position is final only once its end event came.
+    // No interrupt check here (the flag that brought us here stays raised).
+    const Clock::time_point deadline = Clock::now() + kBrakeLimit;
+    while (model_.any_moving() && Clock::now() < deadline) {
+      if (SessionResult<std::vector<BoardFrame>> got = pump(kSlice); !got) return got.error();
+      pending_replies_.clear();
+    }
+    if (model_.any_moving()) {
+      return make_error(SessionError::Kind::kNoReply, "a motor still moved " + std::to_string(kBrakeLimit.count()) +
+                                                          " ms after its stop");
     }
   }
   return Done{};
