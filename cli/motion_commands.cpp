@@ -306,24 +306,40 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
       exit_code = kExitInvalid;
       return;
     }
-    std::unique_ptr<Session> session = connect(g, exit_code);
-    if (!session) return;
-    options.firmware = session->firmware() == Firmware::kV2 ? motion::TargetFirmware::kV2 : motion::TargetFirmware::kSeed;
     if (!o->at.empty()) {
-      // Resuming: the plan starts where the first run started.
+      // Resuming: the plan starts where the first run started. A usage error, found before the
+      // port is opened.
+      std::vector<std::string> items;
       std::stringstream list(o->at);
-      std::string item;
-      for (uint32_t m = 1; m <= proto::kMotorCount && std::getline(list, item, ','); ++m) {
+      for (std::string item; std::getline(list, item, ',');) items.push_back(item);
+      if (o->at.back() == ',') items.push_back("");
+      std::string problem;
+      if (items.size() != proto::kMotorCount) {
+        problem = "--at takes " + std::to_string(proto::kMotorCount) + " values, motors 1,2,3 (steps, or - for unknown), not " +
+                  std::to_string(items.size()) + ": '" + o->at + "'";
+      }
+      for (uint32_t m = 1; problem.empty() && m <= items.size(); ++m) {
+        const std::string& item = items[m - 1];
         if (item == "-") continue;
         char* end = nullptr;
         const long long v = std::strtoll(item.c_str(), &end, 10);
         if (item.empty() || *end != '\0') {
-          exit_code = report_error(g, SessionError{SessionError::Kind::kInvalid,
-                                                   "--at: '" + item + "' is not a number of steps or -", proto::Reason::kOk});
-          return;
+          problem = "--at: '" + item + "' (motor " + std::to_string(m) + ") is not a number of steps or -";
+        } else {
+          options.start_position[m - 1] = v;
         }
-        options.start_position[m - 1] = v;
       }
+      if (!problem.empty()) {
+        report_error(g, SessionError{SessionError::Kind::kInvalid, problem, proto::Reason::kOk});
+        exit_code = kExitUsage;
+        return;
+      }
+    }
+    std::unique_ptr<Session> session = connect(g, exit_code);
+    if (!session) return;
+    options.firmware = session->firmware() == Firmware::kV2 ? motion::TargetFirmware::kV2 : motion::TargetFirmware::kSeed;
+    if (!o->at.empty()) {
+      // Positions given: the plan counts from them, not from where the motors are now.
     } else if (session->firmware() == Firmware::kV2) {
       // Absolute moves start from where the board says each motor is.
       for (const motion::MotorConfig& m : file.motors) {
@@ -352,6 +368,7 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     Progress progress(g.json);
     motion::RunOptions run_options;
     run_options.from = o->from;
+    run_options.resume = !o->at.empty();
     run_options.on_event = [&progress](const motion::RunEvent& e) { progress(e); };
     motion::MotionRunner runner(*session, *plan);
     const motion::RunReport report = runner.run(run_options);
