@@ -43,16 +43,19 @@ void print_errors(const std::vector<motion::FileError>& errors, bool json) {
 }
 
 // The file, validated and planned; prints the errors and returns nothing when it is not valid.
+// On failure `failure` is the exit code: a file that cannot be read is exit 3, a wrong one 1.
 std::optional<Plan> load_and_plan(const std::string& path, const motion::PlanOptions& options, bool json,
-                                  motion::MotionFile* file_out = nullptr) {
+                                  int& failure, motion::MotionFile* file_out = nullptr) {
   auto file = motion::load_motion_file(path);
   if (!file) {
     print_errors(file.error(), json);
+    failure = std::ifstream(path) ? kExitInvalid : kExitIo;
     return std::nullopt;
   }
   auto plan = motion::plan_motion(*file, options);
   if (!plan) {
     print_errors(plan.error(), json);
+    failure = kExitInvalid;
     return std::nullopt;
   }
   if (file_out != nullptr) *file_out = std::move(*file);
@@ -150,9 +153,8 @@ void add_check(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     motion::PlanOptions options;
     options.firmware = target_of(g);
     motion::MotionFile file;
-    std::optional<Plan> plan = load_and_plan(*path, options, g.json, &file);
+    std::optional<Plan> plan = load_and_plan(*path, options, g.json, exit_code, &file);
     if (!plan) {
-      exit_code = kExitInvalid;
       return;
     }
     if (g.json) {
@@ -182,9 +184,8 @@ void add_plan(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     options.firmware = target_of(g);
     options.baud = g.baud;
     motion::MotionFile file;
-    std::optional<Plan> plan = load_and_plan(o->path, options, g.json, &file);
+    std::optional<Plan> plan = load_and_plan(o->path, options, g.json, exit_code, &file);
     if (!plan) {
-      exit_code = kExitInvalid;
       return;
     }
     if (!o->svg.empty() && !write_file(o->svg, motion::plot_svg(*plan, file.name.empty() ? o->path : file.name))) {
@@ -284,9 +285,8 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     options.firmware = target_of(g);
     options.baud = g.baud;
     if (o->dry_run) {
-      std::optional<Plan> plan = load_and_plan(o->path, options, g.json);
+      std::optional<Plan> plan = load_and_plan(o->path, options, g.json, exit_code);
       if (!plan) {
-        exit_code = kExitInvalid;
         return;
       }
       if (g.json) {
@@ -302,8 +302,7 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     }
     // Validate before touching the port: a file with mistakes never reaches the board.
     motion::MotionFile file;
-    if (!load_and_plan(o->path, options, g.json, &file)) {
-      exit_code = kExitInvalid;
+    if (!load_and_plan(o->path, options, g.json, exit_code, &file)) {
       return;
     }
     if (!o->at.empty()) {
