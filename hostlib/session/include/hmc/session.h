@@ -128,6 +128,8 @@ class Session {
   SessionResult<Done> arm_watchdog(Millis timeout);
   SessionResult<Done> disarm_watchdog();
   bool watchdog_armed() const { return keep_alive_.joinable(); }
+  // The board is the in-process simulator (sim://): its time stops when this process does.
+  bool simulated() const { return transport_->simulated(); }
 
   Firmware firmware() const { return firmware_; }
   // The board's VER answer (v2 only).
