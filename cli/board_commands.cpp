@@ -63,12 +63,20 @@ int wait_and_report(const GlobalOptions& g, Session& s, const std::vector<uint32
       out.push_back(motor_to_json(motor, end));
       continue;
     }
-    std::string how = homing ? (motor.homed ? "homed" : "not homed: the switch was not found") : "done";
+    // Homing halted by the emergency switch ends without its switch too: name the real cause.
+    const char* not_homed = s.model().board.emergency ? "not homed: the emergency switch stopped it"
+                                                       : "not homed: the switch was not found";
+    std::string how = homing ? (motor.homed ? "homed" : not_homed) : "done";
     if (motion == Motion::kMove && end && *end != MotionEnd::kCompleted) {
       how = std::string("ended early: ") + motion_end_name(*end);
     }
     if (motion == Motion::kStop) how = "stopped";
-    if (s.firmware() == Firmware::kSeed) how += " (timed: the seed firmware reports nothing)";
+    if (s.firmware() == Firmware::kSeed) {
+      // Nothing came back: say what was done, and where the motor should be if the board obeyed.
+      std::cout << "motor " << m << ": sent; the original firmware confirms nothing (if it obeyed, "
+                << (homing ? "it is homed, " : "") << position_words(motor) << ")\n";
+      continue;
+    }
     std::cout << "motor " << m << ": " << how << ", " << position_words(motor) << '\n';
   }
   if (g.json) std::cout << nlohmann::json{{"motors", out}} << '\n';
@@ -381,7 +389,6 @@ void add_home(CLI::App& app, const GlobalOptions& g, int& exit_code) {
       if (!o->no_wait) {
         if (SessionResult<Done> watched = watch_link(s, g); !watched) return report_error(g, watched.error());
       }
-      int code = kExitOk;
       // Homing needs every motor at rest (seed rule [2]): one after another.
       for (const uint32_t m : *motors) {
         StepperMove home{m, proto::kActionHome, o->microstep, o->max_steps, o->delay_us};
@@ -396,13 +403,13 @@ void add_home(CLI::App& app, const GlobalOptions& g, int& exit_code) {
         if (!sent) return report_error(g, sent.error());
         if (o->no_wait) {
           if (!g.json) std::cout << "motor " << m << ": homing\n";
-          return code;
+          return static_cast<int>(kExitOk);
         }
+        // The first motor that fails ends it: the next would home under the same fault.
         const int done = wait_and_report(g, s, {m}, Motion::kHome);
-        if (done != kExitOk && done != kExitIncomplete) return done;
-        if (done != kExitOk) code = done;
+        if (done != kExitOk) return done;
       }
-      return code;
+      return static_cast<int>(kExitOk);
     });
   });
 }

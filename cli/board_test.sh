@@ -336,24 +336,28 @@ stopped errors TERM
 start seed --tcp 127.0.0.1:0 --control 127.0.0.1:0 --seed --no-self-test
 if port=$(tcp_port seed) && cport=$(control_port seed); then
   board=tcp://127.0.0.1:$port
-  expect seed-status 0 'seed firmware' -- "$hmc" -p "$board" status
-  expect seed-status-json 0 '"firmware": "seed"' -- "$hmc" -p "$board" status --json
-  t0=$(ms)
-  expect seed-move 0 '^motor 1: done \(timed: the seed firmware reports nothing\), at 400 steps of 1/16' -- \
+  # Silence is never success: without --firmware seed, a board that answers nothing is an error.
+  expect seed-silent 4 'no reply to VER .*not a board, or it is not powered, or not at this baud rate.*--firmware seed' -- \
     "$hmc" -p "$board" move 1 400 --delay 1000 --wait
+  check_match "seed: nothing was moved on silence" '"motor":1,"pos":204800,.*"state":"idle"' "$(control "$cport" status)"
+  expect seed-status 0 'seed firmware' -- "$hmc" -p "$board" --firmware seed status
+  expect seed-status-json 0 '"firmware": "seed"' -- "$hmc" -p "$board" --firmware seed status --json
+  t0=$(ms)
+  expect seed-move 0 '^motor 1: sent; the original firmware confirms nothing \(if it obeyed, at 400 steps of 1/16' -- \
+    "$hmc" -p "$board" --firmware seed move 1 400 --delay 1000 --wait
   took=$(($(ms) - t0))
   check_true "seed move --wait took ${took} ms" "400 steps at 1000 us must take at least 400 ms" test "$took" -ge 400
   # When it returns, the board is done: 204800 + 400 * 16.
   check_match "seed: the motor rests where hmc says" '"motor":1,"pos":211200,.*"state":"idle"' \
     "$(control "$cport" status)"
   t0=$(ms)
-  expect seed-move-given 0 'at 400 steps of 1/16.*timed|timed.*at 400 steps of 1/16' -- \
+  expect seed-move-given 0 'confirms nothing \(if it obeyed, at 400 steps of 1/16' -- \
     "$hmc" -p "$board" --firmware seed move 1 400 --delay 1000 --wait
   took=$(($(ms) - t0))
   check_true "seed move --wait (--firmware seed, no VER) took ${took} ms" "at least 400 ms" test "$took" -ge 400
   check_match "seed: the second move too" '"motor":1,"pos":217600,.*"state":"idle"' "$(control "$cport" status)"
-  expect seed-no-accel 1 'seed firmware has no acceleration' -- "$hmc" -p "$board" move 1 400 --accel 8000
-  expect seed-send 0 'sent \(the seed firmware does not reply\)' -- "$hmc" -p "$board" send SVM 1 90
+  expect seed-no-accel 1 'seed firmware has no acceleration' -- "$hmc" -p "$board" --firmware seed move 1 400 --accel 8000
+  expect seed-send 0 'sent \(the seed firmware does not reply\)' -- "$hmc" -p "$board" --firmware seed send SVM 1 90
   check_match "seed: the move with --accel was not sent" '"motor":1,"pos":217600,.*"state":"idle"' \
     "$(control "$cport" status)"
 else

@@ -43,16 +43,19 @@ void print_errors(const std::vector<motion::FileError>& errors, bool json) {
 }
 
 // The file, validated and planned; prints the errors and returns nothing when it is not valid.
+// On failure `failure` is the exit code: a file that cannot be read is exit 3, a wrong one 1.
 std::optional<Plan> load_and_plan(const std::string& path, const motion::PlanOptions& options, bool json,
-                                  motion::MotionFile* file_out = nullptr) {
+                                  int& failure, motion::MotionFile* file_out = nullptr) {
   auto file = motion::load_motion_file(path);
   if (!file) {
     print_errors(file.error(), json);
+    failure = std::ifstream(path) ? kExitInvalid : kExitIo;
     return std::nullopt;
   }
   auto plan = motion::plan_motion(*file, options);
   if (!plan) {
     print_errors(plan.error(), json);
+    failure = kExitInvalid;
     return std::nullopt;
   }
   if (file_out != nullptr) *file_out = std::move(*file);
@@ -150,9 +153,8 @@ void add_check(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     motion::PlanOptions options;
     options.firmware = target_of(g);
     motion::MotionFile file;
-    std::optional<Plan> plan = load_and_plan(*path, options, g.json, &file);
+    std::optional<Plan> plan = load_and_plan(*path, options, g.json, exit_code, &file);
     if (!plan) {
-      exit_code = kExitInvalid;
       return;
     }
     if (g.json) {
@@ -182,9 +184,8 @@ void add_plan(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     options.firmware = target_of(g);
     options.baud = g.baud;
     motion::MotionFile file;
-    std::optional<Plan> plan = load_and_plan(o->path, options, g.json, &file);
+    std::optional<Plan> plan = load_and_plan(o->path, options, g.json, exit_code, &file);
     if (!plan) {
-      exit_code = kExitInvalid;
       return;
     }
     if (!o->svg.empty() && !write_file(o->svg, motion::plot_svg(*plan, file.name.empty() ? o->path : file.name))) {
@@ -284,9 +285,8 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     options.firmware = target_of(g);
     options.baud = g.baud;
     if (o->dry_run) {
-      std::optional<Plan> plan = load_and_plan(o->path, options, g.json);
+      std::optional<Plan> plan = load_and_plan(o->path, options, g.json, exit_code);
       if (!plan) {
-        exit_code = kExitInvalid;
         return;
       }
       if (g.json) {
@@ -302,28 +302,43 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     }
     // Validate before touching the port: a file with mistakes never reaches the board.
     motion::MotionFile file;
-    if (!load_and_plan(o->path, options, g.json, &file)) {
-      exit_code = kExitInvalid;
+    if (!load_and_plan(o->path, options, g.json, exit_code, &file)) {
       return;
+    }
+    if (!o->at.empty()) {
+      // Resuming: the plan starts where the first run started. A usage error, found before the
+      // port is opened.
+      std::vector<std::string> items;
+      std::stringstream list(o->at);
+      for (std::string item; std::getline(list, item, ',');) items.push_back(item);
+      if (o->at.back() == ',') items.push_back("");
+      std::string problem;
+      if (items.size() != proto::kMotorCount) {
+        problem = "--at takes " + std::to_string(proto::kMotorCount) + " values, motors 1,2,3 (steps, or - for unknown), not " +
+                  std::to_string(items.size()) + ": '" + o->at + "'";
+      }
+      for (uint32_t m = 1; problem.empty() && m <= items.size(); ++m) {
+        const std::string& item = items[m - 1];
+        if (item == "-") continue;
+        char* end = nullptr;
+        const long long v = std::strtoll(item.c_str(), &end, 10);
+        if (item.empty() || *end != '\0') {
+          problem = "--at: '" + item + "' (motor " + std::to_string(m) + ") is not a number of steps or -";
+        } else {
+          options.start_position[m - 1] = v;
+        }
+      }
+      if (!problem.empty()) {
+        report_error(g, SessionError{SessionError::Kind::kInvalid, problem, proto::Reason::kOk});
+        exit_code = kExitUsage;
+        return;
+      }
     }
     std::unique_ptr<Session> session = connect(g, exit_code);
     if (!session) return;
     options.firmware = session->firmware() == Firmware::kV2 ? motion::TargetFirmware::kV2 : motion::TargetFirmware::kSeed;
     if (!o->at.empty()) {
-      // Resuming: the plan starts where the first run started.
-      std::stringstream list(o->at);
-      std::string item;
-      for (uint32_t m = 1; m <= proto::kMotorCount && std::getline(list, item, ','); ++m) {
-        if (item == "-") continue;
-        char* end = nullptr;
-        const long long v = std::strtoll(item.c_str(), &end, 10);
-        if (item.empty() || *end != '\0') {
-          exit_code = report_error(g, SessionError{SessionError::Kind::kInvalid,
-                                                   "--at: '" + item + "' is not a number of steps or -", proto::Reason::kOk});
-          return;
-        }
-        options.start_position[m - 1] = v;
-      }
+      // Positions given: the plan counts from them, not from where the motors are now.
     } else if (session->firmware() == Firmware::kV2) {
       // Absolute moves start from where the board says each motor is.
       for (const motion::MotorConfig& m : file.motors) {
@@ -352,6 +367,7 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     Progress progress(g.json);
     motion::RunOptions run_options;
     run_options.from = o->from;
+    run_options.resume = !o->at.empty();
     run_options.on_event = [&progress](const motion::RunEvent& e) { progress(e); };
     motion::MotionRunner runner(*session, *plan);
     const motion::RunReport report = runner.run(run_options);

@@ -107,6 +107,37 @@ out=$("$hmc" --port "$port" run "$src/examples/camera-slider.json" --from "${fro
 grep -q '^done:' <<<"$out" || fail "resumed run did not finish: $out"
 status=$("$hmc" --port "$port" status --json 2>&1)
 [[ $(pos 3) == 0 ]] || fail "after resuming, the slider ends at $(pos 3), want 0 (where the file leaves it)"
+
+# --- interrupted in step 1, resumed with --from 1 --at: the motors first go back to the start
+cat >"$work/two-glides.json" <<'EOF'
+{
+  "hmc_motion": 1,
+  "motors": {"slider": {"motor": 3}},
+  "steps": [
+    {"move": {"motor": "slider", "by": 8000, "speed": 4000}},
+    {"move": {"motor": "slider", "by": -8000, "speed": 4000}}
+  ]
+}
+EOF
+"$hmc" --port "$port" run "$work/two-glides.json" >"$work/run1.out" 2>"$work/run1.err" &
+run_pid=$!
+sleep 1.0
+kill -INT "$run_pid"
+wait "$run_pid"
+resume=$(grep -o 'resume with: hmc run .*' "$work/run1.err")
+grep -q -- '--from 1 --at ' <<<"$resume" || fail "interrupted in step 1: resume line is '$resume'"
+at=$(grep -o -- '--at [-0-9,]*' <<<"$resume" | cut -d' ' -f2)
+out=$("$hmc" --port "$port" run "$work/two-glides.json" --from 1 --at "$at" 2>&1) || fail "resume from 1: $out"
+status=$("$hmc" --port "$port" status --json 2>&1)
+steps3=$(python3 -c 'import json,sys; print(round(json.load(sys.stdin)["motors"][2]["steps"]))' <<<"$status")
+[[ $steps3 == "${at##*,}" ]] ||
+  fail "resumed from step 1 with --at $at: the slider ends at $steps3 steps, want ${at##*,} (where the plan ends)"
+out=$("$hmc" --port "$port" run "$work/two-glides.json" --from 1 --at 1,2 2>&1)
+code=$?
+[[ $code == 2 ]] && grep -q 'takes 3 values' <<<"$out" && ! grep -q '^board:' <<<"$out" ||
+  fail "--at with 2 values: exit $code (want 2, before the port is opened): $out"
+out=$("$hmc" --port "$port" run "$work/two-glides.json" --at x,y,z 2>&1)
+[[ $? == 2 ]] || fail "--at x,y,z: want exit 2: $out"
 stop_sim
 
 finish motion_test

@@ -15,6 +15,7 @@ namespace {
 
 constexpr Millis kListenSlice{50};     // how long the worker listens between requests
 constexpr Millis kRefreshEvery{200};   // status re-read while connected
+constexpr Millis kLinkWatchdog{500};   // the board brakes after this long without a line
 
 std::string version_text(const Version& v) {
   return std::to_string(v.firmware / 10000) + "." + std::to_string(v.firmware / 100 % 100) + "." +
@@ -219,6 +220,11 @@ void BoardWorker::connect(const Request& q) {
     return;
   }
   session_ = std::move(*session);
+  // A desk left running holds the board: should it die without a word, the board brakes.
+  SessionResult<Done> watched = session_->simulated() ? SessionResult<Done>(Done{}) : session_->arm_watchdog(kLinkWatchdog);
+  if (!watched) {
+    log(LogLine::Kind::kInfo, "no link watchdog: " + watched.error().message);
+  }
   for (auto& a : accel_sent_) a.reset();
   last_refresh_ = Clock::now();
   log(LogLine::Kind::kInfo, "connected: " + session_->description());

@@ -12,6 +12,7 @@
 // reported on its own.
 #include <stdint.h>
 
+#include "firmware/core/controller.h"
 #include "firmware/core/frame_parser.h"
 #include "firmware/core/step_scheduler.h"
 #include "semihost.h"
@@ -227,6 +228,52 @@ Fn fill_fn() { return (Fn)(&StepScheduler::fill); }
 Fn feed_fn() { return (Fn)(&FrameParser::feed); }
 #pragma GCC diagnostic pop
 
+// ---- the main loop: the link watchdog's cost in Controller::poll ------------------------------
+
+class NoSpi final : public hmc::hal::SpiBus {
+ public:
+  uint16_t transfer16(uint8_t, uint16_t) override { return 0; }
+};
+class NoServos final : public hmc::hal::ServoPwm {
+ public:
+  void set_pulse(uint8_t, uint16_t) override {}
+  void release(uint8_t) override {}
+};
+class NoLeds final : public hmc::hal::LedStrips {
+ public:
+  void set_color(uint8_t, uint8_t, uint8_t, uint8_t, uint8_t) override {}
+};
+class OpenSwitches final : public hmc::hal::Switches {
+ public:
+  bool limit_pressed(uint8_t, uint8_t) const override { return false; }
+  bool emergency_pressed() const override { return false; }
+};
+class NoBuzzer final : public hmc::hal::Buzzer {
+ public:
+  void tone(uint16_t, uint16_t) override {}
+};
+class NoBootLeds final : public hmc::hal::BootLeds {
+ public:
+  void set(bool, bool) override {}
+};
+// Bytes queued by the benchmark, replies dropped.
+class QueueSerial final : public hmc::hal::SerialPort {
+ public:
+  int read_byte() override { return at < length ? static_cast<uint8_t>(bytes[at++]) : -1; }
+  void write(const uint8_t*, uint32_t) override {}
+  void queue(const char* text) {
+    length = at = 0;
+    while (text[length] != 0 && length < sizeof bytes) bytes[length] = text[length], ++length;
+  }
+  char bytes[64] = {};
+  uint32_t length = 0, at = 0;
+};
+
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpmf-conversions"
+Fn poll_fn() { return (Fn)(&hmc::fw::Controller::poll); }
+#pragma GCC diagnostic pop
+
 // ---- step engine scenarios --------------------------------------------------------------------
 
 struct Scenario {
@@ -426,6 +473,57 @@ void calibrate() {
   flush();
 }
 
+// Controller::poll with the link watchdog off and armed (500 ms, not due): an idle poll, and a
+// poll that receives one blank line (the host's keep-alive). The difference is the watchdog's.
+void run_main_loop() {
+  FakeTimer timer;
+  FakePins pins;
+  NoSpi spi;
+  NoServos servos;
+  NoLeds leds;
+  OpenSwitches switches;
+  NoBuzzer buzzer;
+  NoBootLeds boot_leds;
+  QueueSerial serial;
+  const hmc::fw::Board board{timer, pins, spi, servos, leds, switches, buzzer, boot_leds, serial};
+  hmc::fw::ControllerOptions options;
+  options.self_test = false;
+  hmc::fw::Controller controller(board, options);  // on the stack: no exit-time destructor
+  controller.boot(hmc::fw::ResetReport{});
+  timer.clock = 48000000;  // 1 s: the boot's timers are past, the next are a second away
+  serial.queue("");
+  controller.poll();
+  const Fn fn = poll_fn();
+  uint32_t figures[2][2];  // [off, armed][idle, keep-alive]
+  for (int armed = 0; armed < 2; ++armed) {
+    serial.queue(armed ? "STX#2#WDG#500#244#ETX\n" : "STX#2#WDG#0#0#ETX\n");
+    controller.poll();
+    if (controller.watchdog_ms() != (armed ? 500u : 0u)) fail("WDG was not applied");
+    serial.queue("");
+    figures[armed][0] = instructions(fn, &controller, 0);
+    serial.queue("\n");
+    figures[armed][1] = instructions(fn, &controller, 0);
+  }
+  line("");
+  line("Controller::poll (the main loop, idle board), instructions per call, link watchdog off and armed:");
+  line("");
+  line("| poll | watchdog off | armed (500 ms) | the watchdog's share |");
+  line("|---|---|---|---|");
+  static const char* const kRows[] = {"no byte", "one blank line (keep-alive)"};
+  for (int row = 0; row < 2; ++row) {
+    put("| ");
+    put(kRows[row]);
+    put(" | ");
+    put_u(figures[0][row]);
+    put(" | ");
+    put_u(figures[1][row]);
+    put(" | ");
+    put_u(figures[1][row] - figures[0][row]);
+    put(" |\n");
+  }
+  flush();
+}
+
 }  // namespace
 
 int main() {
@@ -464,6 +562,8 @@ int main() {
        "frame | per byte, whole frame |");
   line("|---|---|---|---|---|---|");
   run_parser();
+
+  run_main_loop();
 
   return g_ok ? 0 : 1;
 }

@@ -294,6 +294,7 @@ class SimTransport final : public Transport {
   }
 
   bool simulated() const override { return true; }
+  bool seed_firmware() const override { return options_.seed; }
 
  private:
   // Real time: virtual time follows the wall clock from the open, going on from the replayed state.

@@ -60,7 +60,7 @@ RunReport MotionRunner::run(const RunOptions& options) {
     }
     return report;
   };
-  if (options.from > 1 && options.return_to_plan) {
+  if ((options.from > 1 || options.resume) && options.return_to_plan) {
     if (SessionResult<Done> back = return_to(planned_positions(plan_, options.from)); !back) {
       return fail(options.from, back.error());
     }

@@ -17,6 +17,8 @@ constexpr Millis kDetectTimeout{250};
 constexpr Millis kSlice{50};
 // While a motion runs and the board says nothing for this long, ask it (an event may be lost).
 constexpr Millis kStatusEvery{500};
+// Longest a stopped motor may brake before the host reports it as still moving.
+constexpr Millis kBrakeLimit{10000};
 // Seed firmware: how long the host assumes a homing without a step bound may take.
 constexpr Millis kSeedHomingTime{20000};
 
@@ -186,16 +188,20 @@ void Session::keep_alive_if_due() {
 SessionResult<std::unique_ptr<Session>> Session::open(std::unique_ptr<Transport> transport,
                                                        const SessionOptions& options) {
   std::unique_ptr<Session> session(new Session(std::move(transport), options));
-  if (options.firmware == FirmwareChoice::kSeed) {
+  if (options.firmware == FirmwareChoice::kSeed || session->transport_->seed_firmware()) {
     session->firmware_ = Firmware::kSeed;
     return session;
   }
   if (SessionResult<Done> detected = session->detect(); !detected) return detected.error();
-  if (session->firmware_ == Firmware::kSeed && options.firmware == FirmwareChoice::kV2) {
+  if (session->firmware_ == Firmware::kSeed) {
+    // Silence is never success: a wrong port, an unpowered board and a wrong baud rate are
+    // silent too. Only the user can say the board runs the original firmware.
     return make_error(SessionError::Kind::kNoReply,
-                      "no reply to VER from " + session->transport_->description() +
-                          " within " + std::to_string(kDetectTimeout.count()) +
-                          " ms: is the board powered, connected and at this baud rate?");
+                      "no reply to VER from " + session->transport_->description() + " within " +
+                          std::to_string(kDetectTimeout.count()) +
+                          " ms: this is not a board, or it is not powered, or not at this baud rate (--baud); or "
+                          "it runs the original (seed) firmware, which answers nothing: then say so with "
+                          "--firmware seed");
   }
   if (SessionResult<Done> refreshed = session->refresh(); !refreshed) return refreshed.error();
   return session;
@@ -484,9 +490,19 @@ SessionResult<Done> Session::stop_all() {
     if (!reply) return reply.error();
   }
   if (firmware_ == Firmware::kV2) {
-    // The motors' final positions arrive as events right after the replies.
     for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
       if (SessionResult<BoardFrame> status = execute(StatusQuery{m}); !status) return status.error();
+    }
+    // A motor with an acceleration brakes: its position is final only once its end event came.
+    // No interrupt check here (the flag that brought us here stays raised).
+    const Clock::time_point deadline = Clock::now() + kBrakeLimit;
+    while (model_.any_moving() && Clock::now() < deadline) {
+      if (SessionResult<std::vector<BoardFrame>> got = pump(kSlice); !got) return got.error();
+      pending_replies_.clear();
+    }
+    if (model_.any_moving()) {
+      return make_error(SessionError::Kind::kNoReply, "a motor still moved " + std::to_string(kBrakeLimit.count()) +
+                                                          " ms after its stop");
     }
   }
   return Done{};

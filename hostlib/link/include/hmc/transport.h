@@ -37,6 +37,9 @@ class Transport {
   virtual std::string description() const = 0;
   // True for the in-process simulated board.
   virtual bool simulated() const { return false; }
+  // True when the transport itself knows its board runs the seed firmware, which answers
+  // nothing (the simulated board's ?seed); a real port never knows.
+  virtual bool seed_firmware() const { return false; }
 };
 
 struct PortOptions {

@@ -35,6 +35,9 @@ struct RunOptions {
   // Resuming: move each motor first to where the plan has it when action `from` starts
   // (needs positions the board reports).
   bool return_to_plan = true;
+  // Resuming from the first action too (`hmc run --at`): the motors go first to where the plan
+  // starts, since an interrupted first action left them somewhere on the way.
+  bool resume = false;
   std::function<void(const RunEvent&)> on_event;
 };
 

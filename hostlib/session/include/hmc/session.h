@@ -55,7 +55,8 @@ enum class Firmware : uint8_t { kV2, kSeed };
 inline constexpr double kSeedTimeMargin = 1.02;
 inline constexpr Millis kSeedTimeSlack{30};
 
-// Which firmware to expect: detect it with VER, or take it as given (skips the query).
+// Which firmware to expect: ask VER (kDetect and kV2: no answer is a kNoReply error, as a wrong
+// port or an unpowered board is silent too), or take the seed's as given (skips the query).
 enum class FirmwareChoice : uint8_t { kDetect, kV2, kSeed };
 
 struct SessionError {
@@ -130,6 +131,8 @@ class Session {
   SessionResult<Done> arm_watchdog(Millis timeout);
   SessionResult<Done> disarm_watchdog();
   bool watchdog_armed() const { return keep_alive_.joinable(); }
+  // The board is the in-process simulator (sim://): its time stops when this process does.
+  bool simulated() const { return transport_->simulated(); }
 
   Firmware firmware() const { return firmware_; }
   // The board's VER answer (v2 only).

@@ -1,0 +1,131 @@
+#!/usr/bin/python3
+"""Runs every cell of cli/testdata/lies.txt: the real `hmc` against a fresh hmc-sim (or a port
+that never answers), the failure the cell names injected while the command runs, and checks the
+exit code, the wording and the board's state afterwards (hmc-sim's control channel).
+Usage: lies_test.py HMC_BINARY HMC_SIM_BINARY SOURCE_DIR"""
+import json, os, pty, re, signal, socket, subprocess, sys, tempfile, threading, time
+
+hmc, sim, src = (os.path.abspath(a) for a in sys.argv[1:4])
+work = tempfile.mkdtemp()
+env = dict(os.environ, HMC_SIM_STATE=os.path.join(work, "state"))
+env.pop("HMC_PORT", None)
+
+
+def start_sim(extra):
+    err = open(os.path.join(work, "sim.err"), "w+")
+    proc = subprocess.Popen([sim, "--tcp", "127.0.0.1:0", "--control", "127.0.0.1:0", "--no-self-test"] + extra,
+                            stderr=err, stdout=subprocess.DEVNULL)
+    for _ in range(200):
+        err.seek(0)
+        text = err.read()
+        ports = re.findall(r"listening on tcp://127\.0\.0\.1:(\d+)", text)
+        if len(ports) == 2:
+            return proc, "tcp://127.0.0.1:" + ports[0], int(ports[1])
+        time.sleep(0.02)
+    proc.kill()
+    raise RuntimeError("hmc-sim did not start: " + text)
+
+
+def control(port, command):
+    with socket.create_connection(("127.0.0.1", port)) as c:
+        c.sendall((command + "\n").encode())
+        answer = b""
+        while not answer.endswith(b"\n"):
+            chunk = c.recv(4096)
+            if not chunk:
+                break
+            answer += chunk
+    return answer.decode().strip()
+
+
+def silent_tcp():
+    listener = socket.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen(4)
+    held = []
+
+    def hold():
+        try:
+            while True:
+                held.append(listener.accept())  # kept open, never answered
+        except OSError:
+            pass  # the listener was closed: the cell is over
+
+    threading.Thread(target=hold, daemon=True).start()
+    return listener, "tcp://127.0.0.1:%d" % listener.getsockname()[1]
+
+
+def run_cell(cell, board, during, args, want_exit, wording, after):
+    sim_proc, cport, keep = None, None, None
+    if board in ("v2", "seed", "on-switch"):
+        extra = {"v2": [], "seed": ["--seed"], "on-switch": ["--axis", "1:0:819200:0"]}[board]
+        sim_proc, port, cport = start_sim(extra)
+    elif board == "silent-pty":
+        master, slave = pty.openpty()
+        port, keep = os.ttyname(slave), (master, slave)
+    else:
+        keep, port = silent_tcp()
+    try:
+        cmd = [hmc, "--port", port, "--watchdog", "300"] + args.split()
+        t0 = time.monotonic()
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env, cwd=work)
+        if during != "none":
+            what, at = during.split("@")
+            time.sleep(int(at) / 1000)
+            if what == "estop":
+                control(cport, "estop")
+            else:
+                proc.send_signal({"kill": signal.SIGKILL, "int": signal.SIGINT, "hup": signal.SIGHUP}[what])
+        out, _ = proc.communicate(timeout=60)
+        code = proc.returncode if proc.returncode >= 0 else 128 - proc.returncode
+        text = out.decode(errors="replace")
+        problems = []
+        if code != int(want_exit):
+            problems.append("exit %d, want %s" % (code, want_exit))
+        if not re.search(wording, text, re.M):
+            problems.append("wording does not match /%s/" % wording)
+        if after in ("idle", "fired"):
+            time.sleep(0.6)  # the watchdog's 300 ms and a stop's braking
+            status = json.loads(control(cport, "status"))
+            moving = [m for m in status["motors"] if m["state"] != "idle"]
+            if moving:
+                problems.append("motors still moving on the board: %s" % moving)
+        if after == "where-said":
+            time.sleep(0.6)
+            status = json.loads(control(cport, "status"))
+            for motor, steps, micro in re.findall(r"motor (\d) stopped at (-?\d+) steps of 1/(\d+)", text):
+                board_pos = status["motors"][int(motor) - 1]["pos"]
+                if int(steps) * 256 // int(micro) != board_pos or status["motors"][int(motor) - 1]["state"] != "idle":
+                    problems.append("motor %s: hmc says %s steps of 1/%s, the board rests at %d/256 (%s)" %
+                                    (motor, steps, micro, board_pos, status["motors"][int(motor) - 1]["state"]))
+        if after == "fired":
+            st = subprocess.run([hmc, "--port", port, "status", "--json"], capture_output=True, env=env, cwd=work)
+            if not json.loads(st.stdout).get("watchdog", {}).get("fired"):
+                problems.append("the next status does not report the watchdog: " + st.stdout.decode())
+        return problems, text, time.monotonic() - t0
+    finally:
+        if sim_proc:
+            sim_proc.kill()
+            sim_proc.wait()
+        if isinstance(keep, tuple):
+            for fd in keep:
+                os.close(fd)
+        elif keep is not None:
+            keep.close()
+
+
+failures = 0
+cells = 0
+start = time.monotonic()
+for line in open(os.path.join(src, "cli", "testdata", "lies.txt")):
+    if not line.strip() or line.startswith("#"):
+        continue
+    fields = [f.strip() for f in line.split(" | ")]
+    cells += 1
+    problems, text, took = run_cell(*fields)
+    if problems:
+        failures += 1
+        print("FAIL %s: %s\n  hmc %s\n  output: %s" % (fields[0], "; ".join(problems), fields[3],
+                                                      text.strip().replace("\n", "\n          ")))
+print("lies_test: %d cells, %d failed (%.1f s)" % (cells, failures, time.monotonic() - start))
+sys.exit(1 if failures else 0)
