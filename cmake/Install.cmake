@@ -19,8 +19,8 @@ include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
 set(hmc_install_files ${PROJECT_BINARY_DIR}/install-files)
-set(HMC_BOARD_VARIANT "samd21-guessed-pins" CACHE STRING
-    "The board variant the firmware images are built for, named in the hmc-firmware package (a placeholder until the firmware names its variants)")
+set(HMC_BOARD_VARIANT "seed" CACHE STRING
+    "The board variant the firmware images in HMC_FIRMWARE_DIR were built for (the firmware preset's HMC_BOARD, default seed), named in the hmc-firmware package")
 set(HMC_FIRMWARE_DIR ${PROJECT_SOURCE_DIR}/build/firmware/firmware/targets/samd21 CACHE PATH
     "Where the firmware preset wrote the images that the hmc-firmware component installs")
 
