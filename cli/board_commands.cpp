@@ -440,12 +440,21 @@ std::string switches_words(const MotorStatus& m) {
   return w.empty() ? "open" : w.substr(0, w.size() - 1) + " pressed";
 }
 
+// "power-on", or why nothing is known.
+std::string last_reset_words(const Session& s) {
+  if (s.model().last_reset) return reset_text(*s.model().last_reset);
+  const proto::FeatureSpec& spec = proto::feature_spec(proto::Feature::kResetCause);
+  return "not reported (the board's firmware, protocol " + std::to_string(s.version() ? s.version()->protocol : 0) +
+         ", predates it; protocol " + std::to_string(spec.since) + " reports it: reflash to see it)";
+}
+
 void print_status(const Session& s) {
   const BoardModel& model = s.model();
   if (s.firmware() == Firmware::kSeed) {
     std::cout << "The seed firmware reports nothing: the board's state is unknown to a new session.\n";
     return;
   }
+  std::cout << "last reset: " << last_reset_words(s) << '\n';
   std::cout << "emergency switch: " << (model.board.emergency ? "PRESSED" : "released") << '\n';
   if (const std::optional<WatchdogStatus>& w = model.watchdog) {
     std::cout << "link watchdog: " << (w->timeout_ms == 0 ? std::string("off") : std::to_string(w->timeout_ms) + " ms")
@@ -522,6 +531,7 @@ void add_monitor(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     std::unique_ptr<Session> s = connect(g, exit_code, show);
     if (!s) return;
     if (s->firmware() == Firmware::kSeed && !g.json) std::cerr << "note: the seed firmware sends nothing\n";
+    if (s->firmware() == Firmware::kV2 && !g.json) std::cerr << "the board's last reset: " << last_reset_words(*s) << "\n";
     if (SessionResult<Done> watched = watch_link(*s, g); !watched) {
       exit_code = report_error(g, watched.error());
       return;

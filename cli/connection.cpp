@@ -191,6 +191,14 @@ nlohmann::json model_to_json(const Session& s) {
   for (const StripStatus& l : model.strips) {
     j["strips"].push_back({{"strip", l.strip}, {"r", l.r}, {"g", l.g}, {"b", l.b}, {"w", l.w}});
   }
+  if (model.last_reset) {
+    nlohmann::json reset = board_frame_to_json(BoardFrame{ResetStatus{*model.last_reset}});
+    reset.erase("name");
+    reset["text"] = reset_text(*model.last_reset);
+    j["last_reset"] = reset;
+  } else {
+    j["last_reset"] = nullptr;  // a board older than protocol 4, or the seed firmware
+  }
   return j;
 }
 

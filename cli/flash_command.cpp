@@ -1,6 +1,8 @@
 // `hmc flash [FILE] [--method bossac|openocd|uf2]`: flash the SAMD21 firmware. Checks the image
-// by its content, then runs bossac or OpenOCD (fork/exec, no shell, their output passed through)
-// or copies the UF2 file onto the bootloader's drive. `--dry-run` prints what it would do.
+// by its content and names the board variant it was built for (warning that the variant's
+// guessed pins are unverified), then runs bossac or OpenOCD (fork/exec, no shell, their output
+// passed through) or copies the UF2 file onto the bootloader's drive, and with --ver-port asks
+// the restarted board's VER. `--dry-run` prints what it would do.
 #include "flash_command.h"
 
 #include <fcntl.h>
@@ -10,6 +12,7 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <chrono>
@@ -28,6 +31,8 @@
 #include <vector>
 
 #include "exit_codes.h"
+#include "hmc/session.h"
+#include "hmc/transport.h"
 
 namespace hmc::cli {
 namespace {
@@ -53,6 +58,8 @@ struct FlashOptions {
   std::string drive;
   std::string offset_text;
   std::string probe = "cmsis-dap";
+  std::string ver_port;
+  double ver_wait_s = 10;
   bool dry_run = false;
   bool no_touch = false;
 };
@@ -188,6 +195,130 @@ void check_uf2_image(const std::string& path, const std::vector<unsigned char>& 
     fail(kExitInvalid, "'" + path + "' is not for the SAMD21: its first block's family id is " +
                            ((le32(b, 8) & kUf2FlagFamily) == 0 ? std::string("absent") : hex(le32(b, 28))) +
                            ", not " + hex(kSamd21Family));
+}
+
+// --- the board variant the image was built for ------------------------------------------------
+
+// The image's board info text (firmware/targets/samd21/board_info.cpp):
+// "hmc-board:<variant>;protocol:<n>;firmware:<n>;guessed:PA05,PA06,...;".
+struct ImageInfo {
+  std::string variant;
+  std::optional<std::uint32_t> protocol;
+  std::optional<std::uint32_t> firmware;
+  std::vector<std::string> guessed;
+};
+
+// The flash contents a file holds: a raw image as it is, a UF2 file's payloads in block order.
+std::vector<unsigned char> flash_bytes(const std::vector<unsigned char>& b) {
+  if (!is_uf2(b)) return b;
+  std::vector<unsigned char> out;
+  for (std::size_t at = 0; at + kUf2Block <= b.size(); at += kUf2Block) {
+    const std::uint32_t size = std::min<std::uint32_t>(le32(b, at + 16), 476);
+    out.insert(out.end(), b.begin() + static_cast<std::ptrdiff_t>(at + 32),
+               b.begin() + static_cast<std::ptrdiff_t>(at + 32 + size));
+  }
+  return out;
+}
+
+std::optional<ImageInfo> image_info(const std::vector<unsigned char>& file_bytes) {
+  static const std::string kMarker = "hmc-board:";
+  const std::vector<unsigned char> bytes = flash_bytes(file_bytes);
+  const auto found = std::search(bytes.begin(), bytes.end(), kMarker.begin(), kMarker.end());
+  if (found == bytes.end()) return std::nullopt;
+  std::string text;
+  for (auto it = found + static_cast<std::ptrdiff_t>(kMarker.size()); it != bytes.end() && *it != 0 && text.size() < 256; ++it) {
+    text += static_cast<char>(*it);
+  }
+  ImageInfo info;
+  std::istringstream fields(text);
+  std::string field;
+  std::getline(fields, info.variant, ';');
+  while (std::getline(fields, field, ';')) {
+    const auto colon = field.find(':');
+    if (colon == std::string::npos) continue;
+    const std::string key = field.substr(0, colon);
+    const std::string value = field.substr(colon + 1);
+    const auto number = [&value]() -> std::optional<std::uint32_t> {
+      if (value.empty() || value.size() > 9 || value.find_first_not_of("0123456789") != std::string::npos) return std::nullopt;
+      return static_cast<std::uint32_t>(std::stoul(value));
+    };
+    if (key == "protocol") info.protocol = number();
+    if (key == "firmware") info.firmware = number();
+    if (key == "guessed") {
+      std::istringstream pins(value);
+      for (std::string pin; std::getline(pins, pin, ',');) {
+        if (!pin.empty()) info.guessed.push_back(pin);
+      }
+    }
+  }
+  return info;
+}
+
+// Says which board variant the image expects and that its guessed pins are unverified.
+void announce_image(const std::optional<ImageInfo>& info) {
+  if (!info) {
+    std::cerr << "hmc flash: note: the image names no board variant (built before board variants, or not this "
+                 "project's firmware): its pin map is unknown\n";
+    return;
+  }
+  std::cerr << "hmc flash: image for board variant '" << info->variant << "'";
+  if (info->firmware && info->protocol) {
+    std::cerr << ", firmware " << firmware_version_text(*info->firmware) << ", protocol " << *info->protocol;
+  }
+  std::cerr << "\n";
+  if (!info->guessed.empty()) {
+    std::string pins;
+    for (const auto& pin : info->guessed) pins += (pins.empty() ? "" : ", ") + pin;
+    std::cerr << "hmc flash: warning: " << info->guessed.size() << " pins of variant '" << info->variant
+              << "' are guessed, not verified on a real board: " << pins
+              << ". Check them against the board's wiring (docs/firmware.md, \"Pin map\") before connecting motor "
+                 "power: a wrong pin can drive an output against another\n";
+  }
+}
+
+// --- after writing: ask the board -----------------------------------------------------------
+
+// Asks VER on `port` until the board answers or `wait_s` passes (the board restarts into the new
+// image, and its UART port may take a moment). Returns the exit code.
+int confirm_version(const std::string& port, double wait_s, const std::optional<ImageInfo>& info) {
+  if (port.empty()) {
+    std::cerr << "hmc flash: not confirmed: give --ver-port (the board's command port, e.g. /dev/ttyUSB0) to have "
+                 "the restarted board's VER checked\n";
+    return kExitOk;
+  }
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(static_cast<long>(wait_s * 1000));
+  std::string last_problem = "no attempt";
+  do {
+    Result<std::unique_ptr<Transport>> link = open_port(port);
+    if (!link) {
+      last_problem = link.error().message;
+    } else {
+      SessionOptions options;
+      options.reply_timeout = std::chrono::milliseconds(500);
+      auto session = Session::open(std::move(link.value()), options);
+      if (!session) {
+        last_problem = session.error().message;
+      } else if (session.value()->firmware() == Firmware::kSeed || !session.value()->version()) {
+        last_problem = "the board does not answer VER (the seed firmware, or not running yet)";
+      } else {
+        const Version& v = *session.value()->version();
+        std::cerr << "hmc flash: the board on " << port << " answers VER: firmware " << firmware_version_text(v.firmware)
+                  << ", protocol " << v.protocol << "\n";
+        if (info && info->firmware && info->protocol && (v.firmware != *info->firmware || v.protocol != *info->protocol)) {
+          std::cerr << "hmc flash: error: that is not the image just written (firmware "
+                    << firmware_version_text(*info->firmware) << ", protocol " << *info->protocol << "): is " << port
+                    << " this board's command port?\n";
+          return kExitInvalid;
+        }
+        std::cerr << "hmc flash: confirmed: the board runs the new firmware\n";
+        return kExitOk;
+      }
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(250));
+  } while (std::chrono::steady_clock::now() < deadline);
+  std::cerr << "hmc flash: could not confirm the new firmware on " << port << " within " << wait_s << " s: " << last_problem
+            << "\n";
+  return kExitNoReply;
 }
 
 // --- the default file -----------------------------------------------------------------------
@@ -375,8 +506,19 @@ int run_flash(const FlashOptions& o) {
   const std::vector<unsigned char> bytes = read_file(file);
   const std::string abs = fs::absolute(file, ec).lexically_normal().string();
 
+  const std::optional<ImageInfo> info = image_info(bytes);
+  const auto ask_line = [&o, &info] {
+    if (o.ver_port.empty()) return;
+    std::cout << "# ask VER on " << shell_quote(o.ver_port);
+    if (info && info->firmware && info->protocol) {
+      std::cout << ", expect firmware " << firmware_version_text(*info->firmware) << ", protocol " << *info->protocol;
+    }
+    std::cout << "\n";
+  };
+
   if (o.method == "bossac") {
     check_raw_image(file, bytes, kAppOffset);
+    announce_image(info);
     std::string port = o.port;
     if (port.empty()) {
       const char* env = std::getenv("HMC_PORT");
@@ -392,6 +534,7 @@ int run_flash(const FlashOptions& o) {
         std::cout << "# wait up to 10 s for the bootloader's port " << shell_quote(port) << "\n";
       }
       std::cout << shell_line(argv) << "\n";
+      ask_line();
       return kExitOk;
     }
     if (!o.no_touch) {
@@ -401,11 +544,12 @@ int run_flash(const FlashOptions& o) {
     }
     run_step("writing with bossac", tool, argv);
     std::cerr << "hmc flash: done: " << abs << " written at 0x2000 and verified; the board restarts into it\n";
-    return kExitOk;
+    return confirm_version(o.ver_port, o.ver_wait_s, info);
   }
 
   if (o.method == "openocd") {
     check_raw_image(file, bytes, offset);
+    announce_image(info);
     const std::string tool = tool_or_note("openocd", "openocd", o.dry_run);
     std::vector<std::string> argv{"openocd", "-f", "interface/" + o.probe + ".cfg"};
     if (o.probe == "jlink") argv.insert(argv.end(), {"-c", "transport select swd"});  // J-Link defaults to JTAG
@@ -413,15 +557,17 @@ int run_flash(const FlashOptions& o) {
                              "program " + tcl_word(abs) + " verify reset " + offset_hex(offset) + "; shutdown"});
     if (o.dry_run) {
       std::cout << shell_line(argv) << "\n";
+      ask_line();
       return kExitOk;
     }
     run_step("programming with openocd", tool, argv);
     std::cerr << "hmc flash: done: " << abs << " written at " << offset_hex(offset) << " and verified\n";
-    return kExitOk;
+    return confirm_version(o.ver_port, o.ver_wait_s, info);
   }
 
   // uf2
   check_uf2_image(file, bytes);
+  announce_image(info);
   const std::string name = fs::path(file).filename().string();
   std::string drive = o.drive;
   if (drive.empty()) {
@@ -437,6 +583,7 @@ int run_flash(const FlashOptions& o) {
       if (!o.dry_run) fail(kExitIo, msg);
       std::cerr << "hmc flash: note: " << msg << "\n";
       std::cout << shell_line({"cp", abs, "<UF2 drive>/" + name}) << "\n";
+      ask_line();
       return kExitOk;
     }
     drive = drives.front();
@@ -450,12 +597,13 @@ int run_flash(const FlashOptions& o) {
   }
   if (o.dry_run) {
     std::cout << shell_line({"cp", abs, target}) << "\n";
+    ask_line();
     return kExitOk;
   }
   copy_to_drive(abs, bytes, target);
   std::cerr << "hmc flash: done: the bootloader writes " << bytes.size() / kUf2Block
             << " blocks and restarts into the firmware; the drive disappears\n";
-  return kExitOk;
+  return confirm_version(o.ver_port, o.ver_wait_s, info);
 }
 
 }  // namespace
@@ -477,6 +625,12 @@ void add_flash_command(CLI::App& app, int& exit_code) {
                     "openocd: flash address to write at, 0x2000 (default, behind the bootloader) or 0x0 (hmc-firmware-nobl)");
   flash->add_option("--probe", options->probe, "openocd: the SWD probe, cmsis-dap or jlink")
       ->check(CLI::IsMember({"cmsis-dap", "jlink"}))
+      ->capture_default_str();
+  flash->add_option("--ver-port", options->ver_port,
+                    "After writing, ask VER on this port (the board's command UART, e.g. /dev/ttyUSB0; or tcp:, sim://) "
+                    "and check it against the image's versions");
+  flash->add_option("--ver-wait", options->ver_wait_s, "Seconds to keep asking VER while the board restarts")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   flash->add_flag("--dry-run,-n", options->dry_run, "Print the commands and actions, one per line, and run nothing");
   flash->callback([options, &exit_code] {

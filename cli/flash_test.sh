@@ -146,6 +146,54 @@ checks=$((checks + 1))
 expect run-bossac-touch-no-port 3 '' '1200-baud touch: cannot open /nonexistent/ttyACM9' -- \
   env PATH="$tmp/fakebin:$PATH" "$hmc" flash fw.bin -p /nonexistent/ttyACM9
 
+# --- the board variant named from the image, its guessed pins, the board's VER after writing ---
+python3 - <<'PYEOF'
+import struct
+def image(info):
+    text = info.encode() + b'\0'
+    return struct.pack('<II', 0x20007FF8, 0x2101) + bytes(0xB0 - 8) + text + bytes(512 - 0xB0 - len(text))
+seed = 'hmc-board:seed;protocol:4;firmware:100;guessed:PA05,PA06;'
+open('board.bin', 'wb').write(image(seed))
+open('board-proto2.bin', 'wb').write(image('hmc-board:bench;protocol:2;firmware:100;guessed:PA05;'))
+# A UF2 file whose info text straddles its two blocks' payloads.
+payload = bytes(250) + seed.encode() + b'\0'
+payload += bytes(512 - len(payload))
+blocks = b''
+for n in range(2):
+    head = struct.pack('<8I', 0x0A324655, 0x9E5D5157, 0x2000, 0x2000 + 256 * n, 256, n, 2, 0x68ED2B88)
+    blocks += head + payload[256 * n:256 * (n + 1)] + bytes(220) + struct.pack('<I', 0x0AB16F30)
+open('board.uf2', 'wb').write(blocks)
+PYEOF
+export HMC_SIM_STATE=$tmp/sim-state
+expect variant-named 0 "bossac -U -p /dev/ttyACM0 --offset=0x2000 -e -w -v -b -R $tmp/board.bin" \
+  "image for board variant 'seed', firmware 0\.1\.0, protocol 4$" -- "$hmc" flash board.bin -p /dev/ttyACM0 --no-touch -n
+expect variant-guessed-pins 0 "bossac -U -p /dev/ttyACM0 --offset=0x2000 -e -w -v -b -R $tmp/board.bin" \
+  "warning: 2 pins of variant 'seed' are guessed, not verified on a real board: PA05, PA06\. Check them" -- \
+  "$hmc" flash board.bin -p /dev/ttyACM0 --no-touch -n
+expect variant-unknown 0 "bossac -U -p /dev/ttyACM0 --offset=0x2000 -e -w -v -b -R $tmp/fw.bin" \
+  'note: the image names no board variant' -- "$hmc" flash fw.bin -p /dev/ttyACM0 --no-touch -n
+expect variant-uf2-across-blocks 0 "cp $tmp/board.uf2 $tmp/drive/board.uf2" "image for board variant 'seed'" -- \
+  "$hmc" flash board.uf2 -m uf2 --drive drive -n
+expect dry-ver-port 0 "bossac -U -p /dev/ttyACM0 --offset=0x2000 -e -w -v -b -R $tmp/board.bin
+# ask VER on 'sim://?fast', expect firmware 0.1.0, protocol 4" '' -- \
+  "$hmc" flash board.bin -p /dev/ttyACM0 --no-touch --ver-port 'sim://?fast' -n
+expect ver-confirmed 0 'fake openocd output' 'sim://\?fast answers VER: firmware 0\.1\.0, protocol 4$' -- \
+  env PATH="$tmp/fakebin:$PATH" "$hmc" flash board.bin -p /dev/ttyACM0 --no-touch --ver-port 'sim://?fast'
+expect ver-confirmed-said 0 'fake openocd output' '^hmc flash: confirmed: the board runs the new firmware$' -- \
+  env PATH="$tmp/fakebin:$PATH" "$hmc" flash board.bin -p /dev/ttyACM0 --no-touch --ver-port 'sim://?fast'
+expect ver-not-asked 0 'fake openocd output' 'not confirmed: give --ver-port' -- \
+  env PATH="$tmp/fakebin:$PATH" "$hmc" flash board.bin -p /dev/ttyACM0 --no-touch
+expect ver-mismatch 1 'fake openocd output' 'error: that is not the image just written \(firmware 0\.1\.0, protocol 2\)' -- \
+  env PATH="$tmp/fakebin:$PATH" "$hmc" flash board-proto2.bin -p /dev/ttyACM0 --no-touch --ver-port 'sim://?fast'
+expect ver-no-board 4 'fake openocd output' 'could not confirm the new firmware on /nonexistent/ttyUSB9 within 0\.5 s' -- \
+  env PATH="$tmp/fakebin:$PATH" "$hmc" flash board.bin -m openocd --ver-port /nonexistent/ttyUSB9 --ver-wait 0.5
+# The real image, when the firmware is built: its variant is the build's (default seed).
+real=$src/build/firmware/firmware/targets/samd21/hmc-firmware.bin
+if [[ -f $real ]]; then
+  expect real-image-variant 0 "bossac -U -p /dev/ttyACM0 --offset=0x2000 -e -w -v -b -R $real" \
+    "image for board variant '(seed|bench)', firmware [0-9.]+, protocol [0-9]+" -- "$hmc" flash "$real" -p /dev/ttyACM0 --no-touch -n
+fi
+
 # --- a real UF2 copy to a fake drive ---
 expect uf2-copy 0 '' 'copying .* to .*drive/fw.uf2' -- "$hmc" flash fw.uf2 -m uf2 --drive drive
 checks=$((checks + 1))

@@ -91,6 +91,20 @@ std::string reasons_table() {
   return out.str();
 }
 
+std::string features_table() {
+  std::ostringstream out;
+  out << "| feature | since protocol | what |\n|---|---|---|\n";
+  for (const auto& f : proto::kFeatures) out << "| `" << f.name << "` | " << f.since << " | " << f.text << " |\n";
+  return out.str();
+}
+
+std::string reset_causes_table() {
+  std::ostringstream out;
+  out << "| cause | name |\n|---|---|\n";
+  for (uint32_t i = 0; i < proto::kResetCauseCount; ++i) out << "| " << i << " | `" << proto::kResetCauseNames[i] << "` |\n";
+  return out.str();
+}
+
 std::string section(const std::string& doc, const std::string& name) {
   const std::string open = "<!-- generated from protocol_facts.h: " + name + " -->\n";
   const auto begin = doc.find(open);
@@ -123,4 +137,6 @@ TEST_CASE("docs/protocol.md tables match protocol_facts.h") {
   check_section(doc.str(), "settings", settings_table());
   check_section(doc.str(), "board frames", board_frames_table());
   check_section(doc.str(), "board fields", board_fields_table());
+  check_section(doc.str(), "features", features_table());
+  check_section(doc.str(), "reset causes", reset_causes_table());
 }

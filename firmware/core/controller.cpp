@@ -51,7 +51,8 @@ Controller::Controller(const Board& board, const ControllerOptions& options)
   }
 }
 
-void Controller::boot() {
+void Controller::boot(const ResetReport& reset) {
+  reset_ = reset;
   for (uint8_t motor = 1; motor <= proto::kMotorCount; ++motor) {
     const Motor& mo = motors_[index(motor)];
     drv8711::Drv8711& driver = drivers_[index(motor)];
@@ -76,6 +77,7 @@ void Controller::boot() {
   driver_check_at_ = now + ms_to_ticks(kDriverCheckMs);
   const uint32_t booted[] = {proto::kProtocolVersion, proto::kFirmwareVersion};
   send(BoardFrameId::kBooted, booted);
+  send_reset(BoardFrameId::kResetEvent);
   check_switches();
 
   if (options_.self_test && !emergency_) start_self_test();
@@ -260,10 +262,25 @@ void Controller::answer_version() {
   send(BoardFrameId::kVersion, values);
 }
 
+void Controller::send_reset(BoardFrameId id) {
+  // Clamped to the fields' ranges: a record read back from RAM after a fault is only as good
+  // as the RAM was.
+  auto exception_number = [](uint32_t n) { return n <= proto::kMaxException ? n : 0u; };
+  const uint32_t cause = static_cast<uint32_t>(reset_.cause);
+  const uint32_t values[] = {cause < proto::kResetCauseCount ? cause : 0u, exception_number(reset_.exception),
+                             reset_.pc & proto::kIntMax, reset_.lr & proto::kIntMax,
+                             exception_number(reset_.context)};
+  send(id, values);
+}
+
 void Controller::answer_status(uint8_t unit) {
   if (unit == proto::kUnitWatchdog) {
     const uint32_t values[] = {watchdog_ms_, watchdog_fired_ ? 1u : 0u};
     send(BoardFrameId::kWatchdogStatus, values);
+    return;
+  }
+  if (unit == proto::kUnitReset) {
+    send_reset(BoardFrameId::kResetStatus);
     return;
   }
   if (unit >= proto::kUnitFirstStrip) {

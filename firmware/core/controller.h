@@ -18,8 +18,8 @@
 //    sum of the commanded rates above it is refused, as is a delay the timer cannot count.
 //  - Every refused line sounds the warning tone. With Options::replies every line is answered
 //    in order (reply_writer.h): ACK, NAK with the reason, token and offset, or the answer to a
-//    query (VER, STA → STA/STB/STL, GET → SET); events (EVB, EVD, EVH, EVL, EVE, EVF) are sent
-//    as things happen. Without replies the board is silent, as the seed is.
+//    query (VER, STA → STA/STB/STL/STW/STR, GET → SET); events (EVB and EVR at boot, EVD, EVH,
+//    EVL, EVE, EVF) are sent as things happen. Without replies the board is silent, as the seed is.
 //  - The link watchdog (protocol 3, WDG): armed with a timeout, the board brakes every motor
 //    (EVD how 6) when no line has ended for that long, then stays disarmed until armed again;
 //    STA 7 reports it (STW), with whether it fired since it was last armed. Off at boot.
@@ -52,6 +52,16 @@ struct Board {
   hal::Buzzer& buzzer;
   hal::BootLeds& boot_leds;
   hal::SerialPort& serial;
+};
+
+// Why the board last reset and, after a fault, where (EVR and STR, proto::kResetFields): the
+// port reads it from the chip before boot().
+struct ResetReport {
+  proto::ResetCause cause = proto::ResetCause::kUnknown;
+  uint32_t exception = 0;  // the exception that caught a fault (3 HardFault, 16 + n interrupt n)
+  uint32_t pc = 0;         // the faulting instruction
+  uint32_t lr = 0;         // the link register then, bit 31 dropped
+  uint32_t context = 0;    // what ran then: 0 the main loop, else its exception number
 };
 
 struct ControllerOptions {
@@ -104,8 +114,8 @@ class Controller {
   Controller(const Board& board, const ControllerOptions& options);
 
   // Main loop, once: drivers set up and enabled, LEDs off, servos centred, boot tune, booting
-  // LEDs, self-test.
-  void boot();
+  // LEDs, the boot events (EVB, then EVR with `reset`), self-test.
+  void boot(const ResetReport& reset);
   // Main loop, as often as possible: serial bytes, lines, timers, ended motions, switches.
   void poll();
   // The step timer's interrupt.
@@ -173,6 +183,7 @@ class Controller {
   void answer_version();
   void answer_status(uint8_t unit);
   void check_watchdog(hal::Ticks now);
+  void send_reset(proto::BoardFrameId id);  // EVR or STR
   void check_switches();
   void check_drivers(hal::Ticks now);
   void run_timers(hal::Ticks now);
@@ -213,6 +224,7 @@ class Controller {
   hal::Ticks watchdog_at_;       // when it fires unless a line ends first
   bool watchdog_fired_;          // since it was last armed
   proto::ChecksumMode next_mode_;                    // CRC: applied after the line's reply
+  ResetReport reset_;
   hal::Ticks boot_led_at_;
   bool boot_led_left_;
   const Note* tune_;

@@ -220,9 +220,14 @@ static_assert(kSettingHomeLocate == kSettingCount, "one SettingId per kSettings 
 inline constexpr uint32_t kUnitBoard = 4;        // switches, emergency, servos
 inline constexpr uint32_t kUnitFirstStrip = 5;   // 5 and 6: LED strips 1 and 2
 inline constexpr uint32_t kUnitWatchdog = kUnitFirstStrip + kStripCount;  // 7, protocol 3
+inline constexpr uint32_t kUnitReset = kUnitWatchdog + 1;                  // 8: why the board last reset, protocol 4
+// The units every protocol-2 board answers; the later ones came with a feature (kFeatures'
+// status_unit), and a board older than the feature refuses its unit as out of range.
+inline constexpr uint32_t kUnitLastBase = kUnitFirstStrip + kStripCount - 1;  // 6
 
 inline constexpr FieldSpec kStatusFields[] = {
-    {"unit", 1, kUnitWatchdog, 0, 0, 0, "1-3 a motor, 4 the board, 5-6 LED strip 1-2, 7 the link watchdog"},
+    {"unit", 1, kUnitReset, 0, 0, 0,
+     "1-3 a motor, 4 the board, 5-6 LED strip 1-2, 7 the link watchdog (protocol 3), 8 the last reset (protocol 4)"},
 };
 inline constexpr FieldSpec kSetFields[] = {
     {"motor", 1, kMotorCount, 0, 0, 0, "stepper 1-3"},
@@ -280,8 +285,25 @@ static_assert(commands_indexed_by_id(), "kCommands[i] must describe CommandId i"
 // Board -> host frames (protocol v2, docs/protocol.md "Replies" and "Protocol v2"). One reply
 // per non-blank line received; events (names starting with 'E') come unprompted between them.
 
-inline constexpr uint32_t kProtocolVersion = 3;
+inline constexpr uint32_t kProtocolVersion = 4;
 inline constexpr uint32_t kFirmwareVersion = 100;  // major·10000 + minor·100 + patch: 0.1.0
+
+// Why the board last reset (EVR, STR). The SAMD21 reads it from PM RCAUSE; kFault is a system
+// reset its fault handler requested after recording where the fault happened.
+enum class ResetCause : uint8_t {
+  kUnknown = 0,   // no cause recorded (e.g. a board that cannot tell)
+  kPowerOn = 1,
+  kBrownOut = 2,  // supply dipped below the brown-out detector's level
+  kExternal = 3,  // the reset pin
+  kWatchdog = 4,  // the main loop stopped kicking the watchdog
+  kSoftware = 5,  // a system reset request (a bootloader, bossac -R, the firmware itself)
+  kFault = 6,     // a CPU fault or an interrupt without a handler: exception, pc, lr say where
+};
+inline constexpr const char* kResetCauseNames[] = {"unknown",  "power_on", "brown_out", "external",
+                                                   "watchdog", "software", "fault"};
+inline constexpr uint32_t kResetCauseCount = sizeof(kResetCauseNames) / sizeof(kResetCauseNames[0]);
+// Exception numbers (ARMv6-M): 2 NMI, 3 HardFault, 16 + n peripheral interrupt n (SAMD21: 28).
+inline constexpr uint32_t kMaxException = 16 + 28 - 1;
 
 enum class BoardFrameId : uint8_t {
   kAck,
@@ -298,6 +320,8 @@ enum class BoardFrameId : uint8_t {
   kEmergencyChanged,
   kDriverFault,
   kWatchdogStatus,  // protocol 3
+  kResetStatus,     // protocol 4
+  kResetEvent,      // protocol 4
 };
 
 struct BoardFrameSpec {
@@ -364,6 +388,18 @@ inline constexpr FieldSpec kBootedFields[] = {
     {"protocol", 1, 255, 0, 0, 0, "protocol version"},
     {"firmware", 0, kIntMax, 0, 0, 0, "major*10000 + minor*100 + patch"},
 };
+// EVR (after EVB at boot) and STR (the answer to STA 8): why the board last reset. The fault
+// fields are 0 unless cause is fault. Addresses travel as decimal numbers up to INT_MAX: `lr`
+// drops bit 31, which only the exception-return values 0xFFFFFFF1/9/D have on this chip.
+inline constexpr FieldSpec kResetFields[] = {
+    {"cause", 0, kResetCauseCount - 1, 0, 0, 0,
+     "0 unknown, 1 power-on, 2 brown-out, 3 reset pin, 4 watchdog, 5 software, 6 fault"},
+    {"exception", 0, kMaxException, 0, 0, 0, "fault: the exception that caught it (3 HardFault, 16+n interrupt n)"},
+    {"pc", 0, kIntMax, 0, 0, 0, "fault: the address of the faulting instruction"},
+    {"lr", 0, kIntMax, 0, 0, 0, "fault: the link register then (bit 31 dropped)"},
+    {"context", 0, kMaxException, 0, 0, 0, "fault: what ran then (0 the main loop, else its exception number)"},
+};
+
 inline constexpr FieldSpec kLimitChangedFields[] = {
     {"motor", 1, kMotorCount, 0, 0, 0, "motor with switches"},
     {"end", 0, 1, 0, 0, 0, "0 toward reverse, 1 toward forward"},
@@ -395,7 +431,9 @@ inline constexpr BoardFrameSpec kBoardFrames[] = {
     {"EVL", BoardFrameId::kLimitChanged, 3, kLimitChangedFields, "event: a limit switch changed"},
     {"EVE", BoardFrameId::kEmergencyChanged, 1, kEmergencyChangedFields, "event: the emergency switch changed"},
     {"EVF", BoardFrameId::kDriverFault, 2, kDriverFaultFields, "event: a driver fault"},
-    {"STW", BoardFrameId::kWatchdogStatus, 2, kWatchdogStatusFields, "reply to STA 7"},
+    {"STW", BoardFrameId::kWatchdogStatus, 2, kWatchdogStatusFields, "reply to STA 7 (protocol 3)"},
+    {"STR", BoardFrameId::kResetStatus, 5, kResetFields, "reply to STA 8 (protocol 4)"},
+    {"EVR", BoardFrameId::kResetEvent, 5, kResetFields, "event: why the board reset, after EVB (protocol 4)"},
 };
 inline constexpr uint32_t kBoardFrameCount = sizeof(kBoardFrames) / sizeof(kBoardFrames[0]);
 
@@ -420,17 +458,20 @@ constexpr bool is_event(const BoardFrameSpec& frame) { return frame.name[0] == '
 
 enum class Feature : uint8_t {
   kLinkWatchdog,  // WDG, STA 7 (STW), EVD how 6
+  kResetCause,    // EVR after EVB at boot, STA 8 (STR)
 };
 
 struct FeatureSpec {
   Feature feature;
-  uint32_t since;    // the first protocol version that has it
-  const char* name;  // stable identifier
-  const char* text;  // what it is, for people
+  uint32_t since;        // the first protocol version that has it
+  const char* name;      // stable identifier
+  const char* text;      // what it is, for people
+  uint32_t status_unit;  // the STA unit it brought; 0 none
 };
 
 inline constexpr FeatureSpec kFeatures[] = {
-    {Feature::kLinkWatchdog, 3, "link_watchdog", "the link watchdog"},
+    {Feature::kLinkWatchdog, 3, "link_watchdog", "the link watchdog (WDG, STA 7)", kUnitWatchdog},
+    {Feature::kResetCause, 4, "reset_cause", "the reset cause and fault record (EVR, STA 8)", kUnitReset},
 };
 inline constexpr uint32_t kFeatureCount = sizeof(kFeatures) / sizeof(kFeatures[0]);
 
@@ -444,6 +485,25 @@ constexpr bool features_indexed_and_released() {
 }
 static_assert(features_indexed_and_released(),
               "kFeatures[i] describes Feature i, from a protocol version this firmware speaks");
+
+// The feature that brought STA unit `unit`, or nullptr for the units every protocol-2 board has.
+constexpr const FeatureSpec* status_unit_feature(uint32_t unit) {
+  for (const FeatureSpec& f : kFeatures) {
+    if (f.status_unit != 0 && f.status_unit == unit) return &f;
+  }
+  return nullptr;
+}
+// The highest STA unit a board of `protocol` answers (2: 6, 3: 7, 4: 8); above it, NAK out of range.
+constexpr uint32_t status_unit_max(uint32_t protocol) {
+  uint32_t last = kUnitLastBase;
+  for (const FeatureSpec& f : kFeatures) {
+    if (f.since <= protocol && f.status_unit > last) last = f.status_unit;
+  }
+  return last;
+}
+static_assert(status_unit_max(2) == kUnitLastBase && status_unit_max(3) == kUnitWatchdog &&
+                  status_unit_max(kProtocolVersion) == kStatusFields[0].max,
+              "STA's units grow one feature at a time, and this firmware answers them all");
 
 constexpr bool is_power_of_two(uint32_t v) { return v != 0 && (v & (v - 1)) == 0; }
 

@@ -53,6 +53,9 @@ template <typename IO> constexpr void fields(IO& io, LimitChanged& f) {
 template <typename IO> constexpr void fields(IO& io, EmergencyChanged& f) { io.flag(f.pressed); }
 template <typename IO> constexpr void fields(IO& io, DriverFault& f) { io.number(f.motor); io.number(f.status); }
 template <typename IO> constexpr void fields(IO& io, WatchdogStatus& f) { io.number(f.timeout_ms); io.flag(f.fired); }
+template <typename IO> constexpr void fields(IO& io, ResetInfo& f) {
+  io.code(f.cause); io.number(f.exception); io.number(f.pc); io.number(f.lr); io.number(f.context);
+}
 
 // STA's flags: bit 0 homed, bits 1-2 the switches, bit 3 runs until stopped, bits 4-7 log2
 // microstep.
@@ -250,6 +253,41 @@ const char* motion_end_name(MotionEnd how) {
   return "?";
 }
 
+const char* reset_cause_name(proto::ResetCause cause) {
+  const auto code = static_cast<uint32_t>(cause);
+  return code < proto::kResetCauseCount ? proto::kResetCauseNames[code] : "unknown";
+}
+
+std::string reset_text(const ResetInfo& r) {
+  switch (r.cause) {
+    case proto::ResetCause::kPowerOn: return "power-on";
+    case proto::ResetCause::kBrownOut: return "brown-out (the supply dipped)";
+    case proto::ResetCause::kExternal: return "the reset pin";
+    case proto::ResetCause::kWatchdog: return "the watchdog (the firmware's main loop stalled)";
+    case proto::ResetCause::kSoftware: return "a software reset request";
+    case proto::ResetCause::kFault: break;
+    case proto::ResetCause::kUnknown: return "unknown";
+  }
+  auto exception_name = [](uint32_t n) -> std::string {
+    if (n == 0) return "the main loop";
+    if (n == 2) return "NMI";
+    if (n == 3) return "HardFault";
+    if (n >= 16) return "interrupt " + std::to_string(n - 16);
+    return "exception " + std::to_string(n);
+  };
+  auto address = [](uint32_t a) {
+    static constexpr char kHex[] = "0123456789ABCDEF";
+    std::string out = "0x";
+    for (int shift = 28; shift >= 0; shift -= 4) out += kHex[(a >> shift) & 0xF];
+    return out;
+  };
+  // The wire drops bit 31, which only the exception-return values 0xFFFFFFFx have.
+  const uint32_t lr = r.lr >= 0x7FFFFFF0u ? r.lr | 0x80000000u : r.lr;
+  std::string out = "a fault (" + exception_name(r.exception) + (r.exception >= 16 ? " had no handler" : "") +
+                    ") at pc " + address(r.pc) + ", lr " + address(lr);
+  return out + ", in " + (r.context == 0 ? std::string("the main loop") : exception_name(r.context));
+}
+
 std::string firmware_version_text(uint32_t firmware) {
   return std::to_string(firmware / 10000) + "." + std::to_string(firmware / 100 % 100) + "." +
          std::to_string(firmware % 100);
@@ -342,6 +380,8 @@ struct Describer {
     return "the board booted: protocol " + std::to_string(b.protocol) + ", firmware " +
            firmware_version_text(b.firmware) + "; checksums: the seed's sum";
   }
+  std::string operator()(const ResetStatus& r) const { return "last reset: " + reset_text(r); }
+  std::string operator()(const ResetEvent& r) const { return "the board reset by " + reset_text(r); }
   std::string operator()(const MotionEnded& e) const {
     const std::string who = "motor " + std::to_string(e.motor);
     switch (e.how) {

@@ -150,3 +150,38 @@ TEST_CASE("encode_board_frame refuses what the wire cannot carry") {
         "STX#5#EVD#1#1#1#2147483647#" + std::to_string((1 + 1 + 1 + 2147483647u) % 256) + "#ETX");
   CHECK(*hmc::encode_board_frame(hmc::Ack{}, ChecksumMode::kCrc16) == "STX#1#ACK#20688#ETX");
 }
+
+TEST_CASE("EVR and STR: the reset cause, and where a fault happened, in words") {
+  auto power_on = decode_board_frame("STX#6#EVR#1#0#0#0#0#1#ETX");
+  REQUIRE(power_on.ok());
+  CHECK(hmc::is_event(*power_on));
+  CHECK(hmc::describe(*power_on) == "the board reset by power-on");
+  auto watchdog = decode_board_frame("STX#6#STR#4#0#0#0#0#4#ETX");
+  REQUIRE(watchdog.ok());
+  CHECK_FALSE(hmc::is_event(*watchdog));
+  CHECK(hmc::describe(*watchdog) == "last reset: the watchdog (the firmware's main loop stalled)");
+  // A HardFault at 0x21A4 in the step interrupt (TC4: exception 35), called from 0x2173.
+  auto fault = decode_board_frame("STX#6#EVR#6#3#8612#8563#35#67#ETX");
+  REQUIRE(fault.ok());
+  const auto& r = std::get<hmc::ResetEvent>(*fault);
+  CHECK(r.cause == hmc::proto::ResetCause::kFault);
+  CHECK(hmc::describe(*fault) ==
+        "the board reset by a fault (HardFault) at pc 0x000021A4, lr 0x00002173, in interrupt 19");
+  // An interrupt without a handler (exception 16 + 7), in the main loop; LR an exception return
+  // (0xFFFFFFF9, bit 31 dropped on the wire).
+  hmc::ResetStatus unhandled;
+  unhandled.cause = hmc::proto::ResetCause::kFault;
+  unhandled.exception = 23;
+  unhandled.pc = 0x2400;
+  unhandled.lr = 0x7FFFFFF9;
+  CHECK(hmc::describe(unhandled) ==
+        "last reset: a fault (interrupt 7 had no handler) at pc 0x00002400, lr 0xFFFFFFF9, in the main loop");
+  auto encoded = hmc::encode_board_frame(unhandled);
+  REQUIRE(encoded.ok());
+  CHECK(encoded.value() == "STX#6#STR#6#23#9216#2147483641#0#" +
+                               std::to_string((6 + 23 + 9216 + 2147483641ull) % 256) + "#ETX");
+  // A cause this host does not know is out of range, not a crash.
+  auto unknown = decode_board_frame("STX#6#EVR#9#0#0#0#0#9#ETX");
+  REQUIRE_FALSE(unknown.ok());
+  CHECK(unknown.error().reason == hmc::proto::Reason::kOutOfRange);
+}

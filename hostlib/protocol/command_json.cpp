@@ -47,6 +47,10 @@ struct BoardFrameJson {
   json operator()(const EmergencyChanged& e) const { return {{"pressed", e.pressed}}; }
   json operator()(const DriverFault& f) const { return {{"motor", f.motor}, {"status", f.status}}; }
   json operator()(const WatchdogStatus& w) const { return {{"timeout_ms", w.timeout_ms}, {"fired", w.fired}}; }
+  json operator()(const ResetInfo& r) const {
+    return {{"cause", reset_cause_name(r.cause)}, {"exception", r.exception}, {"pc", r.pc}, {"lr", r.lr},
+            {"context", r.context}};
+  }
 };
 
 }  // namespace

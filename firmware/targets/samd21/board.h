@@ -1,29 +1,33 @@
-// The board's wiring: every pin, peripheral instance and interrupt priority the SAMD21 port
-// uses, in one file. This is the one place to change for another wiring; nothing else in
-// firmware/targets/samd21 names a pin.
-//
-// What is known of the real board (HARDWARE.md): commands arrive on SERCOM5 (TX PB22, RX PB23,
-// function D) through the FT232RL, and the DRV8711 drivers hang on SERCOM4 as an SPI bus (MISO
-// PA12, MOSI PB10, SCK PB11, function D) with GPIO chip selects. Everything else below is a
-// choice made on free SAMD21G18 pins, keeping these pins free: PA00/PA01 (32 kHz crystal),
-// PA10/PA11 (the stock bootloader's UART), PA24/PA25 (native USB, the bootloader's port),
-// PA30/PA31 (SWD) and PA03 (analog reference). Pin functions are from the SAMD21 datasheet's
-// "I/O Multiplexing" table; docs/firmware.md has this map as a table.
+// The board's wiring as the port uses it: the pins, peripheral instances, pads and interrupt
+// priorities, all derived from the one pin table of the board variant chosen at build time
+// (HMC_BOARD, default "seed"; boards/*.h hold the tables with the evidence for every pin,
+// pin_map.h the checks they pass). Nothing else in firmware/targets/samd21 names a pin.
 #pragma once
 
 #include <stdint.h>
 
+#include "boards/boards.h"
+#include "pin_map.h"
 #include "regs_port.h"
+
+#ifndef HMC_BOARD
+#define HMC_BOARD "seed"
+#endif
 
 namespace hmc::samd21::board {
 
-// A port pin: group 0 = PA, 1 = PB.
-struct Pin {
-  uint8_t group;
-  uint8_t number;
-};
-constexpr Pin pa(uint8_t n) { return Pin{0, n}; }
-constexpr Pin pb(uint8_t n) { return Pin{1, n}; }
+using pin_map::Pin;
+using pin_map::Role;
+
+static_assert(boards::has_variant(HMC_BOARD), "HMC_BOARD names no variant in boards/boards.h");
+inline constexpr const pin_map::BoardVariant& kVariant = *boards::find_variant(HMC_BOARD);
+static_assert(pin_map::check(kVariant).what == nullptr,
+              "the board variant's pin table fails its checks: run pin_map_test for the reason");
+
+// The row of a role; every role has one (checked above).
+constexpr const pin_map::PinAssignment& row(Role r) { return *pin_map::find(kVariant, r); }
+constexpr Pin pin(Role r) { return row(r).pin; }
+constexpr port::Function function(Role r) { return static_cast<port::Function>(row(r).function - 'A'); }
 
 inline constexpr uint32_t kCpuHz = 48000000;  // DFLL48M; the step timer counts at this rate
 
@@ -34,26 +38,30 @@ inline constexpr uint32_t kCpuHz = 48000000;  // DFLL48M; the step timer counts 
 // timing are off by as much).
 inline constexpr bool kTryCrystal32k = true;
 
-// ---- Command serial line: SERCOM5 USART to the FT232RL (HARDWARE.md) ------------------------
+// ---- Command serial line: a SERCOM USART to the FT232RL -----------------------------------
 namespace uart {
-inline constexpr uint32_t kSercom = 5;
-inline constexpr Pin kTx = pb(22);  // PAD2
-inline constexpr Pin kRx = pb(23);  // PAD3
-inline constexpr port::Function kFunction = port::Function::kD_SercomAlt;
-inline constexpr uint32_t kTxpo = 1;  // TX on PAD2
-inline constexpr uint32_t kRxPad = 3;
+inline constexpr uint32_t kSercom = row(Role::kUartTx).instance;
+inline constexpr Pin kTx = pin(Role::kUartTx);
+inline constexpr Pin kRx = pin(Role::kUartRx);
+inline constexpr port::Function kTxFunction = function(Role::kUartTx);
+inline constexpr port::Function kRxFunction = function(Role::kUartRx);
+inline constexpr uint32_t kTxpo = static_cast<uint32_t>(pin_map::usart_txpo(row(Role::kUartTx).index));
+inline constexpr uint32_t kRxPad = row(Role::kUartRx).index;
 inline constexpr uint32_t kBaud = 115200;
 }  // namespace uart
 
-// ---- DRV8711 bus: SERCOM4 SPI master, mode 0, MSB first (HARDWARE.md) -----------------------
+// ---- DRV8711 bus: a SERCOM SPI master, mode 0, MSB first (HARDWARE.md) ---------------------
 namespace driver_spi {
-inline constexpr uint32_t kSercom = 4;
-inline constexpr Pin kMiso = pa(12);  // PAD0
-inline constexpr Pin kMosi = pb(10);  // PAD2
-inline constexpr Pin kSck = pb(11);   // PAD3
-inline constexpr port::Function kFunction = port::Function::kD_SercomAlt;
-inline constexpr uint32_t kDopo = 1;  // DO PAD2, SCK PAD3
-inline constexpr uint32_t kDiPad = 0;
+inline constexpr uint32_t kSercom = row(Role::kDriverMosi).instance;
+inline constexpr Pin kMiso = pin(Role::kDriverMiso);
+inline constexpr Pin kMosi = pin(Role::kDriverMosi);
+inline constexpr Pin kSck = pin(Role::kDriverSck);
+inline constexpr port::Function kMisoFunction = function(Role::kDriverMiso);
+inline constexpr port::Function kMosiFunction = function(Role::kDriverMosi);
+inline constexpr port::Function kSckFunction = function(Role::kDriverSck);
+inline constexpr uint32_t kDopo =
+    static_cast<uint32_t>(pin_map::spi_dopo(row(Role::kDriverMosi).index, row(Role::kDriverSck).index));
+inline constexpr uint32_t kDiPad = row(Role::kDriverMiso).index;
 inline constexpr uint32_t kSckHz = 500000;  // the rate HARDWARE.md cites; the chip allows 4 MHz
 }  // namespace driver_spi
 
@@ -64,16 +72,17 @@ struct DriverPins {
   Pin cs;
 };
 inline constexpr DriverPins kDrivers[3] = {
-    {pa(5), pa(6), pa(7)},
-    {pa(8), pa(9), pa(13)},
-    {pa(20), pa(21), pa(23)},
+    {pin(Role::kStep1), pin(Role::kDir1), pin(Role::kCs1)},
+    {pin(Role::kStep2), pin(Role::kDir2), pin(Role::kCs2)},
+    {pin(Role::kStep3), pin(Role::kDir3), pin(Role::kCs3)},
 };
 
 // ---- Servos 1 (pan) and 2 (tilt): TCC0 PWM, 50 Hz ------------------------------------------
 namespace servo {
-inline constexpr Pin kPins[2] = {pa(18), pa(19)};   // TCC0 WO[2], WO[3]: function F
-inline constexpr uint32_t kChannels[2] = {2, 3};    // WO[n] follows CC[n % 4]
-inline constexpr port::Function kFunction = port::Function::kF_Tcc;
+inline constexpr Pin kPins[2] = {pin(Role::kServo1), pin(Role::kServo2)};
+// WO[n] follows CC[n % 4] (TCC0 has four compare channels; WEXCTRL.OTMX = 0).
+inline constexpr uint32_t kChannels[2] = {row(Role::kServo1).index % 4u, row(Role::kServo2).index % 4u};
+inline constexpr port::Function kFunctions[2] = {function(Role::kServo1), function(Role::kServo2)};
 }  // namespace servo
 
 // ---- SK6812 strips 1-2: one SPI master (data out only) and one DMA channel each -------------
@@ -81,13 +90,14 @@ struct LedStripPins {
   Pin data;
   uint32_t sercom;
   port::Function function;
-  uint32_t dopo;         // DO on PAD0 for both
+  uint32_t dopo;         // DO on the data pin's pad, the clock pad left unrouted
   uint32_t dma_channel;
 };
-inline constexpr LedStripPins kLedStrips[2] = {
-    {pa(16), 1, port::Function::kC_Sercom, 0, 0},  // SERCOM1 PAD0
-    {pa(22), 3, port::Function::kC_Sercom, 0, 1},  // SERCOM3 PAD0
-};
+constexpr LedStripPins strip_pins(Role r, uint32_t dma_channel) {
+  return {pin(r), row(r).instance, function(r), static_cast<uint32_t>(pin_map::spi_dopo_data_only(row(r).index)),
+          dma_channel};
+}
+inline constexpr LedStripPins kLedStrips[2] = {strip_pins(Role::kStrip1, 0), strip_pins(Role::kStrip2, 1)};
 inline constexpr uint32_t kLedsPerStrip = 90;  // the seed's LED_NUM (HARDWARE.md)
 inline constexpr uint32_t kLedBrightness = 100;  // of 255, as the seed sets (HARDWARE.md)
 
@@ -101,21 +111,22 @@ struct SwitchPin {
   bool active_low;
 };
 // [motor 1-2][end]: end 0 toward reverse (home), end 1 toward forward.
+constexpr SwitchPin switch_pin(Role r) { return {pin(r), row(r).index, kVariant.switches_active_low}; }
 inline constexpr SwitchPin kLimits[2][2] = {
-    {{pb(2), 2, true}, {pb(3), 3, true}},
-    {{pb(8), 8, true}, {pb(9), 9, true}},
+    {switch_pin(Role::kLimit1Reverse), switch_pin(Role::kLimit1Forward)},
+    {switch_pin(Role::kLimit2Reverse), switch_pin(Role::kLimit2Forward)},
 };
-inline constexpr SwitchPin kEmergency = {pa(15), 15, true};
+inline constexpr SwitchPin kEmergency = switch_pin(Role::kEmergency);
 
 // ---- Buzzer: TC3 toggling WO[0] (frequency mode), function E --------------------------------
 namespace buzzer {
-inline constexpr Pin kPin = pa(14);
-inline constexpr port::Function kFunction = port::Function::kE_TcTcc;
+inline constexpr Pin kPin = pin(Role::kBuzzer);
+inline constexpr port::Function kFunction = function(Role::kBuzzer);
 }  // namespace buzzer
 
 // ---- Booting LEDs (active high) ------------------------------------------------------------
-inline constexpr Pin kBootLedLeft = pa(27);
-inline constexpr Pin kBootLedRight = pa(28);
+inline constexpr Pin kBootLedLeft = pin(Role::kBootLedLeft);
+inline constexpr Pin kBootLedRight = pin(Role::kBootLedRight);
 
 // ---- Interrupt priorities (0 highest of the M0+'s four) -------------------------------------
 // The step timer preempts everything; the UART receiver next (two bytes of hardware buffer,

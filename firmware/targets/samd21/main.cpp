@@ -5,9 +5,11 @@
 //   irq_sercom5  command UART, priority 1 → receive ring / transmit ring
 //   irq_eic      switches, priority 2     → Controller::on_switch_change()
 //
-// Order at power-up: interrupts masked (and anything a bootloader enabled switched off), clocks
-// (48 MHz), watchdog, every output to its safe level, peripherals, interrupts on, then at least 1 ms before the drivers are configured (the DRV8711 accepts SPI
-// 1 ms after power-up, HARDWARE.md), Controller::boot(), and the main loop.
+// Order at power-up: interrupts masked (reset_handler masks them first; anything a bootloader
+// enabled is switched off here), clocks (48 MHz), watchdog, every output to its safe level,
+// peripherals, interrupts on, then at least 1 ms before the drivers are configured (the DRV8711
+// accepts SPI 1 ms after power-up, HARDWARE.md), Controller::boot() with the reset cause, and
+// the main loop.
 #include "board.h"
 #include "boot_leds.h"
 #include "buzzer.h"
@@ -15,6 +17,7 @@
 #include "core/controller.h"
 #include "irq.h"
 #include "led_strips.h"
+#include "reset_cause.h"
 #include "serial_port.h"
 #include "servo_pwm.h"
 #include "spi_bus.h"
@@ -78,11 +81,12 @@ int main() {
   samd21::irq_enable_all();
 
   while (step_timer.now() < kDriverPowerUpTicks) samd21::watchdog_kick();
-  controller.boot();
+  controller.boot(samd21::reset_report_take());
 
   for (;;) {
     controller.poll();
     led_strips.service();
+    servo_pwm.service();
     buzzer.service();
     samd21::watchdog_kick();
   }

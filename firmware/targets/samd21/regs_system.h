@@ -29,6 +29,15 @@ inline constexpr uint32_t kApbCTc4 = 1u << 12;
 inline constexpr uint32_t kApbCTc5 = 1u << 13;
 inline constexpr uint32_t kAhbMask = kBase + 0x14;
 inline constexpr uint32_t kAhbDmac = 1u << 5;
+// RCAUSE (8-bit, read-only): the cause of the last reset, one bit (Microchip's register
+// description, PM RCAUSE; reset value 0x01).
+inline constexpr uint32_t kRcause = kBase + 0x38;
+inline constexpr uint32_t kRcausePor = 1u << 0;
+inline constexpr uint32_t kRcauseBod12 = 1u << 1;
+inline constexpr uint32_t kRcauseBod33 = 1u << 2;
+inline constexpr uint32_t kRcauseExt = 1u << 4;
+inline constexpr uint32_t kRcauseWdt = 1u << 5;
+inline constexpr uint32_t kRcauseSyst = 1u << 6;  // a system reset request (AIRCR.SYSRESETREQ)
 }  // namespace pm
 
 // ---- SYSCTRL: oscillators and the DFLL48M (datasheet "SYSCTRL") -------------------------

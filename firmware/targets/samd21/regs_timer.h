@@ -39,7 +39,10 @@ namespace tcc {
 inline constexpr uint32_t kTcc0 = 0x42002000;
 // Offsets.
 inline constexpr uint32_t kCtrlA = 0x00;
+inline constexpr uint32_t kCtrlBSet = 0x05;  // 8-bit: CMD 7:5
 inline constexpr uint32_t kSyncBusy = 0x08;
+inline constexpr uint32_t kIntFlag = 0x2C;   // OVF 0 (write 1 to clear)
+inline constexpr uint32_t kCount = 0x34;     // 24 bits
 inline constexpr uint32_t kWave = 0x3C;
 inline constexpr uint32_t kPer = 0x40;
 constexpr uint32_t cc(uint32_t n) { return 0x44u + 4u * n; }
@@ -48,11 +51,17 @@ constexpr uint32_t ccb(uint32_t n) { return 0x70u + 4u * n; }  // buffered: appl
 inline constexpr uint32_t kSwRst = 1u << 0;
 inline constexpr uint32_t kEnable = 1u << 1;
 constexpr uint32_t prescaler(uint32_t code) { return (code & 7u) << 8; }  // 4 = /16
+// CTRLBSET.CMD = READSYNC: copy the counter into COUNT for reading (done when SYNCBUSY.CTRLB
+// and SYNCBUSY.COUNT clear).
+inline constexpr uint8_t kCmdReadSync = 4u << 5;
+inline constexpr uint32_t kIntOvf = 1u << 0;  // a period ended (the counter wrapped to zero)
 // WAVE: WAVEGEN 2:0, 2 = normal (single-slope) PWM.
 inline constexpr uint32_t kWaveNpwm = 2u;
 // SYNCBUSY bits.
 inline constexpr uint32_t kSyncSwRst = 1u << 0;
 inline constexpr uint32_t kSyncEnable = 1u << 1;
+inline constexpr uint32_t kSyncCtrlB = 1u << 2;
+inline constexpr uint32_t kSyncCount = 1u << 4;
 inline constexpr uint32_t kSyncWave = 1u << 6;
 inline constexpr uint32_t kSyncPer = 1u << 7;
 constexpr uint32_t sync_cc(uint32_t n) { return 1u << (8u + n); }

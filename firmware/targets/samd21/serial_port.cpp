@@ -37,8 +37,8 @@ void SerialPort::init() {
   wait_clear32(kBase + sercom::kSyncBusy, sercom::kSyncCtrlB);
 
   pin_input(board::uart::kRx, true);  // idle high if the FT232RL is unpowered
-  pin_function(board::uart::kRx, board::uart::kFunction);
-  pin_function(board::uart::kTx, board::uart::kFunction);
+  pin_function(board::uart::kRx, board::uart::kRxFunction);
+  pin_function(board::uart::kTx, board::uart::kTxFunction);
 
   r8(kBase + sercom::kIntEnSet) = static_cast<uint8_t>(sercom::kIntRxc);
   const uint32_t irq = irqn::kSercom0 + board::uart::kSercom;

@@ -47,9 +47,9 @@ void SpiBus::init() {
   // A pull-up on MISO keeps the line defined while no driver answers; harmless for a
   // push-pull output.
   pin_input(board::driver_spi::kMiso, true);
-  pin_function(board::driver_spi::kMiso, board::driver_spi::kFunction);
-  pin_function(board::driver_spi::kMosi, board::driver_spi::kFunction);
-  pin_function(board::driver_spi::kSck, board::driver_spi::kFunction);
+  pin_function(board::driver_spi::kMiso, board::driver_spi::kMisoFunction);
+  pin_function(board::driver_spi::kMosi, board::driver_spi::kMosiFunction);
+  pin_function(board::driver_spi::kSck, board::driver_spi::kSckFunction);
 
   set32(kBase + sercom::kCtrlA, sercom::kEnable);
   wait_clear32(kBase + sercom::kSyncBusy, sercom::kSyncEnable);

@@ -1,7 +1,15 @@
-// Start-up for the SAMD21 (Cortex-M0+): the vector table and the reset handler. Reset copies
-// .data from flash, zeroes .bss, points VTOR at this table (a bootloader may not), runs the
-// static constructors and calls main(). Every interrupt without a handler of its own lands in
-// unexpected_interrupt(), which resets the chip.
+// Start-up for the SAMD21 (Cortex-M0+): the vector table and the reset handler. Reset masks
+// interrupts, points VTOR at this table (a bootloader may not), copies .data from flash, zeroes
+// .bss, runs the static constructors and calls main(); main() unmasks interrupts once every
+// peripheral is set up. Every fault, and every interrupt without a handler of its own, lands in
+// unexpected_interrupt(), which records where it happened (reset_cause.h) and resets the chip.
+//
+// Why mask first: after a reset PRIMASK is clear, and behind a bootloader the application is
+// entered by a jump, with whatever the bootloader left running (its USB or SysTick interrupts
+// enabled in the NVIC, VTOR at its own table). An interrupt taken before VTOR, .data, .bss and
+// the constructors are done would run the bootloader's handler or one of ours on uninitialised
+// objects. HardFault is not masked by PRIMASK, so VTOR is set right after, before anything
+// that could fault.
 //
 // Vector layout: ARMv6-M exceptions 1-15, then the SAMD21's 28 peripheral interrupts (SAMD21
 // datasheet, "Nested Vector Interrupt Controller", interrupt line mapping; HARDWARE.md lists the
@@ -10,6 +18,7 @@
 
 #include "reg_access.h"
 #include "regs_system.h"
+#include "reset_cause.h"
 
 extern "C" {
 
@@ -27,14 +36,25 @@ extern void (*__init_array_end[])();
 
 int main();
 void reset_handler();
+[[noreturn]] void start_application();
 
-void unexpected_interrupt() {
-  hmc::samd21::r32(hmc::samd21::scb::kAircr) = hmc::samd21::scb::kAircrSysReset;
-  for (;;) {
-  }
+// The stack the exception entry used holds the faulting context's frame: EXC_RETURN bit 2 in
+// LR says which (0 the main stack, 1 the process stack; this firmware uses only the main one).
+__attribute__((naked)) void unexpected_interrupt() noexcept {
+  __asm__ volatile(
+      "movs r0, #4\n\t"
+      "mov r1, lr\n\t"
+      "tst r0, r1\n\t"
+      "bne 1f\n\t"
+      "mrs r0, msp\n\t"
+      "b 2f\n"
+      "1:\n\t"
+      "mrs r0, psp\n"
+      "2:\n\t"
+      "bl record_fault_and_reset\n\t");
 }
 
-#define HMC_WEAK_HANDLER(name) void name() __attribute__((weak, alias("unexpected_interrupt")))
+#define HMC_WEAK_HANDLER(name) void name() noexcept __attribute__((weak, alias("unexpected_interrupt")))
 HMC_WEAK_HANDLER(irq_nmi);
 HMC_WEAK_HANDLER(irq_hard_fault);
 HMC_WEAK_HANDLER(irq_svcall);
@@ -96,13 +116,23 @@ __attribute__((section(".vectors"), used)) const Handler vector_table[16 + 28] =
 
 }  // namespace
 
-extern "C" void reset_handler() {
+// The first instruction masks interrupts, before even the C++ function's prologue below.
+extern "C" __attribute__((naked)) void reset_handler() {
+  __asm__ volatile(
+      "cpsid i\n\t"
+      "bl start_application\n\t");
+}
+
+extern "C" void start_application() {
+  hmc::samd21::r32(hmc::samd21::scb::kVtor) = reinterpret_cast<uint32_t>(&vector_table[0]);
+  __asm__ volatile("dsb\n\tisb" ::: "memory");  // the table is in use from the next instruction
   uint32_t* source = &__data_load__;
   for (uint32_t* d = &__data_start__; d < &__data_end__; ++d) *d = *source++;
   for (uint32_t* d = &__bss_start__; d < &__bss_end__; ++d) *d = 0;
-  hmc::samd21::r32(hmc::samd21::scb::kVtor) = reinterpret_cast<uint32_t>(&vector_table[0]);
   for (void (**f)() = __preinit_array_start; f < __preinit_array_end; ++f) (*f)();
   for (void (**f)() = __init_array_start; f < __init_array_end; ++f) (*f)();
   main();
-  unexpected_interrupt();  // main() never returns
+  hmc::samd21::r32(hmc::samd21::scb::kAircr) = hmc::samd21::scb::kAircrSysReset;  // main() never returns
+  for (;;) {
+  }
 }

@@ -163,7 +163,7 @@ const char* state_name(fw::MotorState state) {
   return "unknown";
 }
 
-SimBoard::SimBoard(const SimConfig& config) : hardware_(new Hardware(*this)) {
+SimBoard::SimBoard(const SimConfig& config) : hardware_(new Hardware(*this)), reset_cause_(config.reset_cause) {
   if (config.baud != 0) {
     // 10 bits per byte (start, 8 data, stop), rounded up to the tick.
     byte_ticks_ = (uint64_t{10} * hal::kTicksPerSecond + config.baud - 1) / config.baud;
@@ -189,7 +189,9 @@ SimBoard::SimBoard(const SimConfig& config) : hardware_(new Hardware(*this)) {
 SimBoard::~SimBoard() = default;
 
 void SimBoard::boot() {
-  controller_->boot();
+  fw::ResetReport reset;
+  reset.cause = reset_cause_;
+  controller_->boot(reset);
   next_poll_ = now_;
   main_loop();
 }

@@ -61,6 +61,9 @@ struct SimConfig {
   fw::ControllerOptions options{};
   std::array<uint32_t, 3> accel{};  // steps/s² per motor
   uint32_t baud = 0;                // both ways; 0: bytes cross at once, else 10 bits per byte
+  // What the boot event (EVR) says caused the reset: a simulated board is powered on, unless a
+  // test asks for another cause (--reset-cause).
+  proto::ResetCause reset_cause = proto::ResetCause::kPowerOn;
 };
 
 // A motor state's name in traces, status lines and behaviour vectors.
@@ -76,7 +79,7 @@ class SimBoard {
   SimBoard(const SimBoard&) = delete;
   SimBoard& operator=(const SimBoard&) = delete;
 
-  // Powers the board up at time 0: Controller::boot().
+  // Powers the board up at time 0: Controller::boot() with the configured reset cause.
   void boot();
 
   Ticks now() const { return now_; }
@@ -193,6 +196,7 @@ class SimBoard {
   std::array<std::vector<Ticks>, 3> step_times_;
   std::ostream* trace_ = nullptr;
   std::unique_ptr<Hardware> hardware_;
+  proto::ResetCause reset_cause_;
   std::unique_ptr<fw::Controller> controller_;
 };
 

@@ -18,7 +18,9 @@ namespace {
 
 constexpr Ticks kMs = 48000;
 constexpr Ticks kByte = 4167;  // 10 bits at 115200 baud, rounded up to the tick
-const std::string kBootEvent = "STX#3#EVB#3#100#103#ETX\n";
+// EVB, then EVR: protocol 4, firmware 0.1.0; reset by power-on. 50 bytes, 4.34 ms at 115200.
+const std::string kBootEvent = "STX#3#EVB#4#100#104#ETX\nSTX#6#EVR#1#0#0#0#0#1#ETX\n";
+constexpr Ticks kBootThrough = 5 * kMs;  // the boot events are through by then
 
 SimConfig quiet_config() {
   SimConfig config;
@@ -47,14 +49,15 @@ TEST_CASE("received bytes arrive at the emulated baud rate") {
   config.baud = 115200;
   SimBoard board(config);
   board.boot();
+  board.run_until(kBootThrough);
+  CHECK(board.take_output() == kBootEvent);
   const std::string frame = "STX#6#LED#1#200#120#100#20#185#ETX\n";
   board.send(frame);
-  // 36 bytes at 10 bits each: 3.125 ms. Not answered before the last byte arrives (the boot
-  // event, 24 bytes, is through by then).
-  board.run_until(3 * kMs);
-  CHECK(board.take_output() == kBootEvent);
+  // 36 bytes at 10 bits each: 3.125 ms. Not answered before the last byte arrives.
+  board.run_until(kBootThrough + 3 * kMs);
+  CHECK(board.take_output().empty());
   // The reply (16 bytes) is through 1.389 ms after that.
-  board.run_until(5 * kMs);
+  board.run_until(kBootThrough + 5 * kMs);
   CHECK(board.take_output() == "STX#1#ACK#0#ETX\n");
   CHECK(board.led(1) == std::array<uint8_t, 4>{200, 120, 100, 20});
 }
@@ -66,13 +69,13 @@ TEST_CASE("sent bytes leave at the emulated baud rate, from when the firmware wr
   SimBoard board(config);
   board.set_trace(&trace);
   board.boot();
-  board.run_until(3 * kMs);
+  board.run_until(kBootThrough);
   CHECK(board.take_output() == kBootEvent);
   CHECK(board.next_output() == kNever);
   const std::string frame = "STX#6#LED#1#200#120#100#20#185#ETX\n";
   board.send(frame);
   // Answered as the frame's last byte arrives; the trace's "tx" is that write.
-  const Ticks written = 3 * kMs + frame.size() * kByte;
+  const Ticks written = kBootThrough + frame.size() * kByte;
   board.run_until(written);
   CHECK(trace.str().find("{\"t\":" + std::to_string(written) + ",\"ev\":\"tx\",\"line\":\"STX#1#ACK#0#ETX\"}") !=
         std::string::npos);
@@ -95,13 +98,13 @@ TEST_CASE("a reply written while the wire is busy leaves after the bytes before 
   config.baud = 115200;
   SimBoard board(config);
   board.boot();
-  board.run_until(3 * kMs);
+  board.run_until(kBootThrough);
   (void)board.take_output();
   // The ACK is written as the frame's end arrives, the NAK of "X" two bytes later, while the
   // ACK is still on the wire.
   const std::string frame = "STX#6#LED#1#200#120#100#20#185#ETX\n";
   board.send(frame + "X\n");
-  const Ticks written = 3 * kMs + frame.size() * kByte;
+  const Ticks written = kBootThrough + frame.size() * kByte;
   // A run loop that follows next_event() stops at every byte.
   std::vector<std::pair<Ticks, std::string>> got;
   while (board.busy()) {
@@ -134,15 +137,15 @@ TEST_CASE("dropped output never arrives, and the wire stays busy until it would 
   SimConfig config = quiet_config();
   config.baud = 115200;
   SimBoard board(config);
-  board.boot();  // the boot event (24 bytes) is on the wire until 24 byte times
+  board.boot();  // the boot events (50 bytes) are on the wire until 50 byte times
   board.run_until(5 * kByte);
   board.drop_output();
   CHECK(board.next_output() == kNever);
   CHECK_FALSE(board.transmitting());
-  // "X" is refused as its end arrives, at 7 byte times: the NAK waits for the boot event's end.
+  // "X" is refused as its end arrives, at 7 byte times: the NAK waits for the boot events' end.
   board.send("X\n");
   board.run_until(7 * kByte);
-  CHECK(board.next_output() == 25 * kByte);
+  CHECK(board.next_output() == 51 * kByte);
   board.run_until(100 * kByte);
   CHECK(board.take_output() == "STX#4#NAK#3#0#0#3#ETX\n");
 }
@@ -152,14 +155,14 @@ TEST_CASE("take_written gives what the firmware wrote at once, on the wire or no
   config.baud = 115200;
   SimBoard board(config);
   board.boot();
-  board.run_until(5 * kByte);  // the boot event: 5 of its 24 bytes through
-  CHECK(board.take_written() == "STX#3#EVB#3#100#103#ETX\n");
+  board.run_until(5 * kByte);  // the boot events: 5 of their 50 bytes through
+  CHECK(board.take_written() == kBootEvent);
   CHECK_FALSE(board.transmitting());
   CHECK(board.take_output().empty());
   // The wire stays busy for them: a reply written now still leaves after them.
   board.send("X\n");
   board.run_until(7 * kByte);
-  CHECK(board.next_output() == 25 * kByte);
+  CHECK(board.next_output() == 51 * kByte);
 }
 
 TEST_CASE("an axis moves by 256/microstep per step and closes its switch at the configured position") {
@@ -174,7 +177,7 @@ TEST_CASE("an axis moves by 256/microstep per step and closes its switch at the 
   // The reply, then the switch event and the end of the motion (halted by a limit switch, at
   // -1600: the firmware counts from 0 at power-up).
   CHECK(board.take_output() ==
-        "STX#3#EVB#3#100#103#ETX\nSTX#1#ACK#0#ETX\nSTX#4#EVL#1#0#1#2#ETX\nSTX#5#EVD#1#3#1#1600#69#ETX\n");
+        kBootEvent + "STX#1#ACK#0#ETX\nSTX#4#EVL#1#0#1#2#ETX\nSTX#5#EVD#1#3#1#1600#69#ETX\n");
   CHECK(board.axis_position(1) == 0);
   CHECK(board.steps(1) == 100);
   CHECK(board.limit_pressed(1, 0));

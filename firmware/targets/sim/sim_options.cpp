@@ -145,6 +145,7 @@ ParsedArgs parse_args(int argc, const char* const* argv) {
   bool no_replies = false;
   bool seed = false;
   bool no_self_test = false;
+  std::string reset_cause = "power_on";
   std::vector<std::string> accels;
   std::vector<std::string> axes;
 
@@ -165,6 +166,10 @@ ParsedArgs parse_args(int argc, const char* const* argv) {
   app.add_flag("--no-replies", no_replies, "Answer nothing, as the seed firmware");
   app.add_flag("--seed", seed, "Behave as the seed firmware: --legacy --no-replies");
   app.add_flag("--no-self-test", no_self_test, "Skip the steppers' self-test at power-up");
+  app.add_option("--reset-cause", reset_cause,
+                 "The reset cause the boot event reports: power_on, brown_out, external, watchdog or software")
+      ->check(CLI::IsMember({"power_on", "brown_out", "external", "watchdog", "software"}))
+      ->capture_default_str();
   app.add_option("--accel", accels, "Acceleration of motor M in steps/s² (repeatable)")
       ->type_name("M:A")
       ->check(checked_by(parse_accel));
@@ -201,6 +206,11 @@ ParsedArgs parse_args(int argc, const char* const* argv) {
   options.config.options.legacy = legacy || seed;
   options.config.options.replies = !(no_replies || seed);
   options.config.options.self_test = !no_self_test;
+  for (uint32_t cause = 0; cause < proto::kResetCauseCount; ++cause) {
+    if (reset_cause == proto::kResetCauseNames[cause]) {
+      options.config.reset_cause = static_cast<proto::ResetCause>(cause);
+    }
+  }
   for (const std::string& text : accels) {
     const AccelOption accel = *parse_accel(text).value;
     options.config.accel[accel.motor - 1u] = accel.steps_per_s2;

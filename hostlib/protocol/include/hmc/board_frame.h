@@ -152,10 +152,27 @@ struct WatchdogStatus {
   bool fired = false;       // it braked the motors since it was last armed
   bool operator==(const WatchdogStatus& o) const { return timeout_ms == o.timeout_ms && fired == o.fired; }
 };
+
+// Why the board last reset and, after a fault, where (protocol 4, proto::kResetFields).
+struct ResetInfo {
+  proto::ResetCause cause = proto::ResetCause::kUnknown;
+  uint32_t exception = 0;  // fault: the exception that caught it (3 HardFault, 16 + n interrupt n)
+  uint32_t pc = 0;         // fault: the faulting instruction's address
+  uint32_t lr = 0;         // fault: the link register, bit 31 dropped (0x7FFFFFFx: an exception return)
+  uint32_t context = 0;    // fault: 0 the main loop, else the exception number that ran
+  bool operator==(const ResetInfo& o) const {
+    return cause == o.cause && exception == o.exception && pc == o.pc && lr == o.lr && context == o.context;
+  }
+};
+// STR: the answer to STA 8.
+struct ResetStatus : ResetInfo {};
+// EVR (protocol 4): sent right after EVB at boot.
+struct ResetEvent : ResetInfo {};
+
 // Ordered by proto::BoardFrameId.
 using BoardFrame = std::variant<Ack, Nak, Version, MotorStatus, BoardStatus, StripStatus, SettingValue, Booted,
                                 MotionEnded, HomingEnded, LimitChanged, EmergencyChanged, DriverFault,
-                                WatchdogStatus>;
+                                WatchdogStatus, ResetStatus, ResetEvent>;
 
 proto::BoardFrameId board_frame_id(const BoardFrame& frame);
 const proto::BoardFrameSpec& board_frame_spec(const BoardFrame& frame);
@@ -181,6 +198,10 @@ std::string describe(const BoardFrame& frame);
 // Names used in words and JSON: "idle", "moving", ...; "completed", "stopped", ...
 const char* motor_state_name(MotorState state);
 const char* motion_end_name(MotionEnd how);
+// "power_on", ..., "fault"; "unknown" for a code this host does not know.
+const char* reset_cause_name(proto::ResetCause cause);
+// "power-on", "a fault (HardFault) at pc 0x000021A0, lr 0x00002311, in the main loop", ...
+std::string reset_text(const ResetInfo& reset);
 // "0.1.0" from major*10000 + minor*100 + patch.
 std::string firmware_version_text(uint32_t firmware);
 
