@@ -8,9 +8,11 @@
 #include <iostream>
 #include <sstream>
 
+#include "axis_units.h"
 #include "exit_codes.h"
 #include "hmc/codec.h"
 #include "hmc/command_json.h"
+#include "profile_choice.h"
 #include "report.h"
 
 namespace hmc::cli {
@@ -26,13 +28,10 @@ void run_on_board(const GlobalOptions& g, int& exit_code, Act act) {
   if (session) exit_code = act(*session);
 }
 
-// "1", "2", "3" or "all" -> the motors meant.
-Result<std::vector<uint32_t>> motors_of(const std::string& text, std::vector<uint32_t> all) {
-  if (text == "all") return all;
-  if (text.size() == 1 && text[0] >= '1' && text[0] <= '0' + static_cast<int>(proto::kMotorCount)) {
-    return std::vector<uint32_t>{static_cast<uint32_t>(text[0] - '0')};
-  }
-  return Error{"motor must be 1-" + std::to_string(proto::kMotorCount) + " or all, not '" + text + "'"};
+// The profile in use (connect() has loaded it, or failed): nullptr when there is none.
+const Profile* profile_in_use(const GlobalOptions& g) {
+  Result<const Profile*, int> profile = use_profile(g);
+  return profile ? *profile : nullptr;
 }
 
 int usage_error(const GlobalOptions& g, const std::string& message) {
@@ -205,6 +204,7 @@ void add_stream(CLI::App& app, const GlobalOptions& g, int& exit_code) {
 // --- move ---------------------------------------------------------------------------------
 
 struct MoveOptions {
+  std::string axis;   // a motor number or a profile axis
   uint32_t motor = 1;
   std::optional<double> steps;
   std::optional<double> degrees;
@@ -212,7 +212,8 @@ struct MoveOptions {
   std::optional<uint32_t> microstep;
   std::optional<uint32_t> delay_us;
   std::optional<double> rate;
-  std::optional<uint32_t> accel;
+  std::optional<std::string> accel;   // steps/s^2, or a quantity for the axis
+  std::optional<std::string> to, by, speed;  // quantities for the axis
   uint32_t steps_per_rev = kFullStepsPerRev;
   bool run = false;
   bool reverse = false;
@@ -246,8 +247,12 @@ Result<StepperMove> move_command(const MoveOptions& o, uint32_t current_microste
 
 void add_move(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   auto o = std::make_shared<MoveOptions>();
-  CLI::App* cmd = app.add_subcommand("move", "move a stepper: STEPS (negative: reverse), --deg or --rev, or --run");
-  cmd->add_option("motor", o->motor, "stepper 1-3")->required()->check(CLI::Range(1u, proto::kMotorCount));
+  CLI::App* cmd = app.add_subcommand(
+      "move", "move a stepper: STEPS (negative: reverse), --deg or --rev, --run, or in the axis's units --to/--by");
+  cmd->add_option("motor", o->axis, "stepper 1-3, or an axis of the profile by name")->required();
+  cmd->add_option("--to", o->to, "go to this position: 250mm, 90deg, 2rev, 3200steps (docs/config.md)");
+  cmd->add_option("--by", o->by, "move this far from where the axis is: -90deg, 12.5mm");
+  cmd->add_option("--speed", o->speed, "with --to/--by: 20mm/s, 45deg/s (default: the profile's speed)");
   cmd->add_option("steps", o->steps, "steps at the microstep (negative: reverse)");
   cmd->add_option("--deg", o->degrees, "degrees instead of steps (--steps-per-rev full steps per turn)");
   cmd->add_option("--rev", o->revolutions, "revolutions instead of steps");
@@ -256,22 +261,71 @@ void add_move(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   cmd->add_option("--microstep", o->microstep, "1, 2, 4 ... 256 (default: the motor's current one)");
   cmd->add_option("--delay", o->delay_us, "us per step (default 500)");
   cmd->add_option("--rate", o->rate, "steps per second instead of --delay");
-  cmd->add_option("--accel", o->accel, "steps/s^2 to ramp up and down (0: constant rate; v2 firmware)");
+  cmd->add_option("--accel", o->accel,
+                  "steps/s^2 to ramp up and down, or 100mm/s2 (0: constant rate; v2 firmware; default with --to/--by: "
+                  "the profile's)");
   cmd->add_option("--steps-per-rev", o->steps_per_rev, "full steps per turn for --deg and --rev (default 200)")
       ->check(CLI::Range(1u, 100000u));
   cmd->add_flag("--wait", o->wait, "wait until the motor stops and print where it is");
   cmd->callback([&g, &exit_code, o] {
+    // An axis no one has is a mistake on the command line: found before the port is opened.
+    Result<const Profile*, int> profile = use_profile(g);
+    if (!profile) {
+      exit_code = profile.error();
+      return;
+    }
+    if (Result<Axis> known = resolve_axis(o->axis, *profile, BoardModel{}, o->steps_per_rev); !known) {
+      exit_code = usage_error(g, known.error().message);
+      return;
+    }
     run_on_board(g, exit_code, [&](Session& s) {
-      Result<StepperMove> move = move_command(*o, s.model().motor(o->motor).microstep);
+      Result<Axis> axis = resolve_axis(o->axis, profile_in_use(g), s.model(), o->steps_per_rev);
+      if (!axis) return usage_error(g, axis.error().message);
+      o->motor = axis->motor;
+      std::vector<std::string> notes;
+      std::optional<uint32_t> accel;
+      Result<StepperMove> move = Error{""};
+      if (o->to || o->by) {
+        if (o->steps || o->degrees || o->revolutions || o->run || o->delay_us || o->rate || o->microstep || o->reverse) {
+          return usage_error(g, "--to and --by take the axis's microstep and --speed: no STEPS, --deg, --rev, --run, "
+                                "--delay, --rate, --microstep or --reverse with them");
+        }
+        Result<UnitMove> planned = unit_move(*axis, s.model().motor(axis->motor), UnitMoveRequest{o->to, o->by, o->speed, o->accel});
+        if (!planned) return usage_error(g, planned.error().message);
+        if (std::optional<std::string> refused = beyond_soft_limits(*axis, s.model().motor(axis->motor), planned->target)) {
+          return report_error(g, SessionError{SessionError::Kind::kRefused, *refused, proto::Reason::kOk});
+        }
+        notes = planned->notes;
+        accel = planned->accel;
+        if (!planned->move) {
+          if (!g.json) std::cout << axis_position_words(*axis, s.model().motor(axis->motor)) << ": already there\n";
+          if (g.json) std::cout << nlohmann::json{{"axes", {axis_to_json(*axis, s.model().motor(axis->motor))}}} << '\n';
+          return static_cast<int>(kExitOk);
+        }
+        move = *planned->move;
+        if (!planned->delay_us) move->delay_us = kDefaultDelayUs;
+      } else {
+        if (o->speed) return usage_error(g, "--speed goes with --to or --by; give STEPS with --delay or --rate");
+        if (!o->microstep) o->microstep = axis->microstep;
+        if (o->accel) {
+          Result<uint32_t> steps = accel_steps(*axis, *o->accel, notes);
+          if (!steps) return usage_error(g, steps.error().message);
+          accel = *steps;
+        }
+        move = move_command(*o, s.model().motor(o->motor).microstep);
+      }
       if (!move) return usage_error(g, move.error().message);
-      if (o->accel) {
+      for (const std::string& note : notes) {
+        if (!g.json) std::cerr << "note: " << note << '\n';
+      }
+      if (accel) {
         if (s.firmware() == Firmware::kSeed) {
           return report_error(g, SessionError{SessionError::Kind::kRefused,
                                               "the seed firmware has no acceleration: move at a constant rate, or plan a "
                                               "staged ramp in a motion file",
                                               proto::Reason::kOk});
         }
-        SessionResult<BoardFrame> set = s.execute(SetSetting{o->motor, proto::kSettingAccel, *o->accel});
+        SessionResult<BoardFrame> set = s.execute(SetSetting{o->motor, proto::kSettingAccel, *accel});
         if (!set) return report_error(g, set.error());
       }
       if (o->wait) {
@@ -279,7 +333,13 @@ void add_move(CLI::App& app, const GlobalOptions& g, int& exit_code) {
       }
       SessionResult<BoardFrame> sent = s.execute(*move);
       if (!sent) return report_error(g, sent.error());
-      if (o->wait) return wait_and_report(g, s, {o->motor}, Motion::kMove);
+      if (o->wait) {
+        const int code = wait_and_report(g, s, {o->motor}, Motion::kMove);
+        if (!g.json && (o->to || o->by) && code != kExitInterrupted) {
+          std::cout << axis_position_words(*axis, s.model().motor(o->motor)) << '\n';
+        }
+        return code;
+      }
       if (g.json) {
         std::cout << nlohmann::json{{"started", command_to_json(*move)}} << '\n';
       } else {
@@ -302,7 +362,7 @@ void add_home(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("home", "home motors against their limit switch, one after another");
-  cmd->add_option("motor", o->motors, "1, 2 or all (the motors with switches)")->required();
+  cmd->add_option("motor", o->motors, "1, 2, an axis of the profile, or all (the motors with switches)")->required();
   cmd->add_option("--microstep", o->microstep, "microstep while seeking (default: keep the current one)");
   cmd->add_option("--delay", o->delay_us, "us per step while seeking (default: the board's home_seek_us)");
   cmd->add_option("--max-steps", o->max_steps, "give up after this many steps (default: no bound)");
@@ -314,7 +374,8 @@ void add_home(CLI::App& app, const GlobalOptions& g, int& exit_code) {
         const bool has = s.version() ? ((s.version()->switch_mask >> (m - 1)) & 1u) != 0 : proto::motor_has_switches(m);
         if (has) with_switches.push_back(m);
       }
-      Result<std::vector<uint32_t>> motors = motors_of(o->motors, with_switches);
+      const Profile* profile = profile_in_use(g);
+      Result<std::vector<uint32_t>> motors = resolve_motors(o->motors, profile, with_switches);
       if (!motors) return usage_error(g, motors.error().message);
       if (o->no_wait && motors->size() > 1) return usage_error(g, "--no-wait homes one motor: homing needs the others at rest");
       if (!o->no_wait) {
@@ -323,8 +384,15 @@ void add_home(CLI::App& app, const GlobalOptions& g, int& exit_code) {
       int code = kExitOk;
       // Homing needs every motor at rest (seed rule [2]): one after another.
       for (const uint32_t m : *motors) {
-        SessionResult<BoardFrame> sent =
-            s.execute(StepperMove{m, proto::kActionHome, o->microstep, o->max_steps, o->delay_us});
+        StepperMove home{m, proto::kActionHome, o->microstep, o->max_steps, o->delay_us};
+        if (const Axis* axis = profile != nullptr ? profile->axis_of_motor(m) : nullptr) {
+          const HomingSetup setup = homing_setup(*axis, home);
+          for (const SetSetting& set : setup.settings) {
+            if (SessionResult<BoardFrame> done = s.execute(set); !done) return report_error(g, done.error());
+          }
+          home = setup.move;
+        }
+        SessionResult<BoardFrame> sent = s.execute(home);
         if (!sent) return report_error(g, sent.error());
         if (o->no_wait) {
           if (!g.json) std::cout << "motor " << m << ": homing\n";
@@ -342,16 +410,18 @@ void add_home(CLI::App& app, const GlobalOptions& g, int& exit_code) {
 void add_stop(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   auto motors_text = std::make_shared<std::string>("all");
   CLI::App* cmd = app.add_subcommand("stop", "stop motors (default: all)");
-  cmd->add_option("motor", *motors_text, "1-3 or all");
+  cmd->add_option("motor", *motors_text, "1-3, an axis of the profile (several: 1,slide), or all");
   cmd->callback([&g, &exit_code, motors_text] {
     run_on_board(g, exit_code, [&](Session& s) {
-      Result<std::vector<uint32_t>> motors = motors_of(*motors_text, {1, 2, 3});
+      Result<std::vector<uint32_t>> motors = resolve_motors(*motors_text, profile_in_use(g), {1, 2, 3});
       if (!motors) return usage_error(g, motors.error().message);
-      if (motors->size() == proto::kMotorCount) {
+      if (*motors_text == "all") {
         if (SessionResult<Done> stopped = s.stop_all(); !stopped) return report_error(g, stopped.error());
       } else {
-        SessionResult<BoardFrame> sent = s.execute(StepperMove{(*motors)[0], proto::kActionStop, 0, 0, 0});
-        if (!sent) return report_error(g, sent.error());
+        for (const uint32_t m : *motors) {
+          SessionResult<BoardFrame> sent = s.execute(StepperMove{m, proto::kActionStop, 0, 0, 0});
+          if (!sent) return report_error(g, sent.error());
+        }
       }
       // A stop brakes when the motor ramps: report once it rests.
       return wait_and_report(g, s, *motors, Motion::kStop) == kExitIo ? static_cast<int>(kExitIo) : static_cast<int>(kExitOk);
@@ -491,10 +561,20 @@ void add_status(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   CLI::App* cmd = app.add_subcommand("status", "the board's state: motors, switches, servos, LED strips");
   cmd->callback([&g, &exit_code] {
     run_on_board(g, exit_code, [&](Session& s) {
+      const Profile* profile = profile_in_use(g);
       if (g.json) {
-        std::cout << model_to_json(s).dump(2) << '\n';
+        nlohmann::json j = model_to_json(s);
+        if (profile != nullptr) {
+          j["axes"] = nlohmann::json::array();
+          for (const Axis& a : profile->axes) j["axes"].push_back(axis_to_json(a, s.model().motor(a.motor)));
+        }
+        std::cout << j.dump(2) << '\n';
       } else {
         print_status(s);
+        if (profile != nullptr && !profile->axes.empty() && s.firmware() == Firmware::kV2) {
+          std::cout << "\naxes (" << profile->path << "):\n";
+          for (const Axis& a : profile->axes) std::cout << "  " << axis_position_words(a, s.model().motor(a.motor)) << '\n';
+        }
       }
       return static_cast<int>(kExitOk);
     });

@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "exit_codes.h"
+#include "profile_choice.h"
 #include "hmc/command_json.h"
 #include "hmc/port_list.h"
 #include "hmc/transport.h"
@@ -75,11 +76,11 @@ Result<std::string> default_port(bool quiet) {
 }  // namespace
 
 void add_global_options(CLI::App& app, GlobalOptions& o) {
-  app.add_option("-p,--port", o.port,
+  o.port_option = app.add_option("-p,--port", o.port,
                  "the board: /dev/ttyUSB0, tcp://HOST:PORT, a pseudo-terminal, or sim:// for the simulated board "
                  "(default: the one FT232R bridge found)")
       ->envname("HMC_PORT");
-  app.add_option("--baud", o.baud, "serial baud rate (default 115200)")->check(CLI::Range(300u, 4000000u));
+  o.baud_option = app.add_option("--baud", o.baud, "serial baud rate (default 115200)")->check(CLI::Range(300u, 4000000u));
   app.add_option("--timeout", o.timeout_ms, "ms to wait for each reply (default 1000)")->check(CLI::Range(10, 600000));
   app.add_flag("--json", o.json, "machine-readable output (docs/cli.md)");
   app.add_flag("-v,--verbose", o.verbose, "show every line sent (>) and received (<) on standard error");
@@ -87,8 +88,11 @@ void add_global_options(CLI::App& app, GlobalOptions& o) {
                  "ms without a line after which the board brakes every motor, armed by run, stream, move --wait, "
                  "home and monitor (default 500; 0: none)")
       ->check(CLI::Range(0, static_cast<int>(proto::kWatchdogMaxMs)));
-  app.add_option("--firmware", o.firmware, "auto (ask VER), v2, or seed (a board that answers nothing)")
+  o.firmware_option = app.add_option("--firmware", o.firmware, "auto (ask VER), v2, or seed (a board that answers nothing)")
       ->check(CLI::IsMember({"auto", "v2", "seed"}));
+  app.add_option("--profile", o.profile,
+                 "the machine profile: axes by name, units, port (default: HMC_PROFILE, else "
+                 "$XDG_CONFIG_HOME/hmc/config.toml when it exists; docs/config.md)");
 }
 
 bool interrupt_requested() { return g_interrupted != 0; }
@@ -105,7 +109,13 @@ SessionResult<Done> watch_link(Session& s, const GlobalOptions& o) {
   return s.arm_watchdog(Millis{o.watchdog_ms});
 }
 
-std::unique_ptr<Session> connect(const GlobalOptions& o, int& exit_code, LineHandler on_line) {
+std::unique_ptr<Session> connect(const GlobalOptions& given, int& exit_code, LineHandler on_line) {
+  Result<GlobalOptions, int> profiled = with_profile_link(given);
+  if (!profiled) {
+    exit_code = profiled.error();
+    return nullptr;
+  }
+  const GlobalOptions& o = *profiled;
   std::string name = o.port;
   if (name.empty()) {
     Result<std::string> found = default_port(o.json);

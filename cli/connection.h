@@ -1,5 +1,5 @@
 // What every board command shares: the global options (--port, --baud, --timeout, --json, -v,
-// --firmware), finding the port, opening the session, Ctrl-C, and turning a session's errors into
+// --firmware, --profile), finding the port, opening the session, Ctrl-C, and turning a session's errors into
 // messages and exit codes (docs/cli.md).
 #pragma once
 
@@ -22,6 +22,11 @@ struct GlobalOptions {
   int verbose = 0;         // -v: every line sent and received, on standard error
   std::string firmware = "auto";  // --firmware auto|v2|seed
   int watchdog_ms = 500;   // --watchdog: the link watchdog long-lived commands arm; 0 none
+  std::string profile;     // --profile (HMC_PROFILE read where the profile is chosen: profile_choice.h)
+  // The options as parsed: a value the command line (or HMC_PORT) did not give comes from the profile.
+  const CLI::Option* port_option = nullptr;
+  const CLI::Option* baud_option = nullptr;
+  const CLI::Option* firmware_option = nullptr;
 };
 
 // Adds the global options to the top-level app (they may also follow a subcommand).

@@ -338,30 +338,54 @@ std::optional<fs::path> root_above(fs::path dir) {
 
 // The repository: above the executable (a build tree inside the checkout), else above the
 // current directory.
-std::optional<fs::path> repository_root() {
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
+std::optional<fs::path> repository_root(const fs::path& exe) {
+  if (!exe.empty()) {
     if (auto root = root_above(exe.parent_path())) return root;
   }
+  std::error_code ec;
   const fs::path cwd = fs::current_path(ec);
   if (!ec) return root_above(cwd);
   return std::nullopt;
 }
 
+// The images an installed hmc finds beside itself: <bindir>/HMC_FIRMWARE_FROM_BINDIR, where
+// the hmc-firmware package (or `cmake --install` after the firmware preset) puts them.
+std::optional<fs::path> installed_firmware_dir(const fs::path& exe) {
+#ifdef HMC_FIRMWARE_FROM_BINDIR
+  std::error_code ec;
+  if (exe.empty()) return std::nullopt;
+  const fs::path dir = (exe.parent_path() / HMC_FIRMWARE_FROM_BINDIR).lexically_normal();
+  if (fs::is_directory(dir, ec)) return dir;
+#else
+  static_cast<void>(exe);
+#endif
+  return std::nullopt;
+}
+
+// A build tree inside the checkout uses the firmware preset's outputs; an installed hmc, the
+// installed images.
 std::string default_file(const std::string& method, std::uint32_t offset) {
-  const auto root = repository_root();
-  if (!root)
-    fail(kExitIo, "no FILE given, and no hmc repository above this executable or the current directory: "
-                  "give the image's path");
+  std::error_code ec;
+  fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) exe.clear();
   const std::string name = std::string(offset == 0 ? "hmc-firmware-nobl" : "hmc-firmware") +
                            (method == "uf2" ? ".uf2" : ".bin");
-  const fs::path file = *root / kFirmwareDir / name;
-  std::error_code ec;
-  if (!fs::exists(file, ec))
-    fail(kExitIo, "no FILE given, and the firmware is not built: " + file.string() + " does not exist (run: " +
-                      kBuildHint + ", in " + root->string() + ")");
-  return file.string();
+  const auto root = repository_root(exe);
+  if (root) {
+    const fs::path file = *root / kFirmwareDir / name;
+    if (!fs::exists(file, ec))
+      fail(kExitIo, "no FILE given, and the firmware is not built: " + file.string() + " does not exist (run: " +
+                        kBuildHint + ", in " + root->string() + ")");
+    return file.string();
+  }
+  if (const auto installed = installed_firmware_dir(exe)) {
+    const fs::path file = *installed / name;
+    if (!fs::exists(file, ec))
+      fail(kExitIo, "no FILE given, and " + file.string() + " does not exist: reinstall the hmc-firmware package");
+    return file.string();
+  }
+  fail(kExitIo, "no FILE given, no hmc repository above this executable or the current directory, and no "
+                "installed firmware (the hmc-firmware package): give the image's path");
 }
 
 // --- the steps ------------------------------------------------------------------------------
@@ -397,7 +421,10 @@ void run_step(const std::string& step, const std::string& tool_path, const std::
 // port (ArduinoCore-samd) resets into the bootloader when it sees this.
 void touch_1200(const std::string& port) {
   const int fd = ::open(port.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK);
-  if (fd < 0) fail(kExitIo, "1200-baud touch: cannot open " + port + ": " + std::strerror(errno));
+  if (fd < 0)
+    fail(kExitIo, "1200-baud touch: cannot open " + port + ": " + std::strerror(errno) +
+                      " (the touch reaches firmware with a native USB serial port, which the hmc firmware does not "
+                      "have: double-tap reset, then run again with --no-touch and the bootloader's port)");
   termios tio{};
   if (::tcgetattr(fd, &tio) == 0) {
     ::cfsetispeed(&tio, B1200);

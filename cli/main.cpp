@@ -5,6 +5,8 @@
 #include <CLI/CLI.hpp>
 
 #include "board_commands.h"
+#include "completion_command.h"
+#include "config_command.h"
 #include "connection.h"
 #include "exit_codes.h"
 #include "flash_command.h"
@@ -46,6 +48,8 @@ int main(int argc, char** argv) {
   hmc::cli::add_ports_command(app, exit_code);
   hmc::cli::add_sim_command(app, exit_code);
   hmc::cli::add_flash_command(app, exit_code);
+  hmc::cli::add_completion_command(app, exit_code);
+  hmc::cli::add_config_command(app, global, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

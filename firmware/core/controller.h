@@ -23,6 +23,7 @@
 //  - The link watchdog (protocol 3, WDG): armed with a timeout, the board brakes every motor
 //    (EVD how 6) when no line has ended for that long, then stays disarmed until armed again;
 //    STA 7 reports it (STW), with whether it fired since it was last armed. Off at boot.
+//  - Why the board last reset (protocol 4): EVR right after EVB at boot, STR for STA 8.
 //  - Protocol v2 settings per motor (SET/GET, proto::kSettings): current, decay, acceleration,
 //    max rate, homing end, seek rate, pull-off and slow locate; soft limits (LIM); the checksum
 //    mode (CRC), switched after its own ACK.

@@ -19,7 +19,7 @@
 #include <system_error>
 #include <utility>
 
-#include "core/protocol_facts.h"
+#include "hmc/protocol_facts.h"
 #include "json_reader.h"
 
 namespace hmc::motion {

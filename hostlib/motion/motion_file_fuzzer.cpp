@@ -22,7 +22,7 @@
 #include <string_view>
 #include <variant>
 
-#include "core/protocol_facts.h"
+#include "hmc/protocol_facts.h"
 #include "fuzz_support.h"
 #include "hmc/motion_file.h"
 #include "hmc/motion_plan.h"

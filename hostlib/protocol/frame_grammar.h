@@ -10,8 +10,8 @@
 #include <string>
 #include <string_view>
 
-#include "core/crc16.h"
-#include "core/protocol_facts.h"
+#include "hmc/crc16.h"
+#include "hmc/protocol_facts.h"
 #include "hmc/codec.h"
 #include "hmc/result.h"
 

@@ -3,7 +3,7 @@
 
 #include <catch2/catch.hpp>
 
-#include "core/protocol_facts.h"
+#include "hmc/protocol_facts.h"
 
 namespace {
 

@@ -1,7 +1,8 @@
 // Clock setup (clocks.h). Sequence and values: HARDWARE.md (NVM wait states 1 at 48 MHz; DFLL48M
 // closed loop ×1465 on the 32.768 kHz crystal through GCLK1, or the factory coarse value) and
-// the SAMD21 datasheet, "SYSCTRL" (DFLL48M configuration order: ONDEMAND cleared, DFLLRDY waited
-// before every DFLL register write, DFLLMUL before closed-loop mode) and "GCLK".
+// the SAMD21 datasheet, "SYSCTRL" (DFLL48M configuration order: DFLLCTRL written first with
+// ONDEMAND cleared, then DFLLRDY waited before every further DFLL register write, DFLLMUL before
+// closed-loop mode) and "GCLK".
 //
 // The CPU runs from OSC8M while the DFLL is configured: a bootloader may have left GCLK0 on the
 // DFLL, and reconfiguring the clock the CPU runs on is not allowed. SysTick, counting 8 MHz CPU
@@ -70,8 +71,10 @@ bool start_crystal() {
 }
 
 // DFLL48M enabled in open loop at the factory coarse value.
+// DFLLCTRL is written before the first wait: at reset ONDEMAND is set and nothing requests the
+// DFLL, so its register interface is not clocked and DFLLRDY stays clear until a write clears
+// ONDEMAND (silicon errata, DFLL48M; the Arduino core, Klipper and ASF do the same).
 void dfll_open_loop(uint32_t coarse) {
-  dfll_sync();
   r16(sysctrl::kDfllCtrl) = static_cast<uint16_t>(sysctrl::kDfllEnable);  // ONDEMAND cleared
   dfll_sync();
   r32(sysctrl::kDfllVal) = sysctrl::dfll_val(coarse, kDfllFineStart);

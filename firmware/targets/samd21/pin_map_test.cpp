@@ -81,6 +81,28 @@ TEST_CASE("the multiplexing table agrees with the rows the libraries rely on") {
   CHECK(pin_has(1, 23, 'D', Unit::kSercom, 5, 3));
   CHECK(pin_has(0, 12, 'D', Unit::kSercom, 4, 0));
   CHECK(pin_has(1, 11, 'D', Unit::kSercom, 4, 3));
+  // ArduinoCore-samd variants/arduino_zero/variant.cpp, its pin descriptions (timer STD = E,
+  // ALT = F; SERCOM STD = C, ALT = D; the EXTINT line).
+  CHECK(pin_has(0, 8, 'E', Unit::kTcc, 0, 0));
+  CHECK(pin_has(0, 8, 'D', Unit::kSercom, 2, 0));
+  CHECK(pin_has(0, 9, 'E', Unit::kTcc, 0, 1));
+  CHECK(pin_has(0, 9, 'A', Unit::kEic, 0, 9));
+  CHECK(pin_has(0, 10, 'C', Unit::kSercom, 0, 2));
+  CHECK(pin_has(0, 15, 'E', Unit::kTc, 3, 1));
+  CHECK(pin_has(0, 15, 'A', Unit::kEic, 0, 15));
+  CHECK(pin_has(0, 16, 'E', Unit::kTcc, 2, 0));
+  CHECK(pin_has(0, 16, 'A', Unit::kEic, 0, 0));
+  CHECK(pin_has(0, 17, 'C', Unit::kSercom, 1, 1));
+  CHECK(pin_has(0, 18, 'E', Unit::kTc, 3, 0));
+  CHECK(pin_has(0, 18, 'C', Unit::kSercom, 1, 2));
+  CHECK(pin_has(0, 19, 'F', Unit::kTcc, 0, 3));
+  CHECK(pin_has(0, 20, 'F', Unit::kTcc, 0, 6));
+  CHECK(pin_has(0, 20, 'A', Unit::kEic, 0, 4));
+  CHECK(pin_has(0, 22, 'E', Unit::kTc, 4, 0));
+  CHECK(pin_has(0, 22, 'A', Unit::kEic, 0, 6));
+  CHECK(pin_has(0, 6, 'E', Unit::kTcc, 1, 0));
+  CHECK(pin_has(1, 10, 'E', Unit::kTc, 5, 0));
+  CHECK(pin_has(1, 8, 'A', Unit::kEic, 0, 8));
   // PA08's function A is NMI, no EXTINT line; PA26 and PA29 do not exist.
   for (uint8_t line = 0; line < 16; ++line) CHECK_FALSE(pin_has(0, 8, 'A', Unit::kEic, 0, line));
   CHECK_FALSE(port_functions::pin_exists(0, 26));

@@ -8,6 +8,13 @@ namespace {
 uint32_t group_base(board::Pin pin) { return port::kBase + port::kGroupStride * pin.group; }
 uint32_t pincfg(board::Pin pin) { return group_base(pin) + port::kPinCfg + pin.number; }
 
+// pin_read() reads IN through the IOBUS, which cannot wait for the input synchroniser: the
+// datasheet ("PORT", CPU Local Bus) requires continuous sampling (CTRL.SAMPLING) for every pin
+// read that way, or the value is stale. Every pin whose input buffer is turned on gets it.
+void sample_continuously(board::Pin pin) {
+  r32(group_base(pin) + port::kCtrl) = r32(group_base(pin) + port::kCtrl) | pin_mask(pin);
+}
+
 }  // namespace
 
 void pin_output(board::Pin pin, bool high) {
@@ -24,6 +31,7 @@ void pin_input(board::Pin pin, bool pull_up) {
   } else {
     r8(pincfg(pin)) = static_cast<uint8_t>(port::kPinCfgInEn);
   }
+  sample_continuously(pin);
 }
 
 void pin_function(board::Pin pin, port::Function function) {
@@ -34,7 +42,10 @@ void pin_function(board::Pin pin, port::Function function) {
   set8(pincfg(pin), port::kPinCfgPmuxEn);
 }
 
-void pin_sense(board::Pin pin) { set8(pincfg(pin), port::kPinCfgInEn); }
+void pin_sense(board::Pin pin) {
+  set8(pincfg(pin), port::kPinCfgInEn);
+  sample_continuously(pin);
+}
 
 void pin_release(board::Pin pin) { clear8(pincfg(pin), port::kPinCfgPmuxEn); }
 

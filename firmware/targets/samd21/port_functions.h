@@ -4,7 +4,9 @@
 // the functions this port can use: A (EIC), C (SERCOM), D (SERCOM-ALT), E (TC/TCC), F (TCC).
 // B (analog), G (I2S, USB, SWD) and H (GCLK, AC) are left out: nothing here uses them. TC6 and
 // TC7 exist only on the 64-pin J package and are left out too. PA08's function A is NMI, not an
-// EXTINT line.
+// EXTINT line. Cross-checked against the pin descriptions of ArduinoCore-samd's Arduino Zero
+// variant (variant.cpp) and Adafruit_NeoPixel_ZeroDMA's pin table for the rows they cover
+// (pin_map_test.cpp).
 //
 // Used by the pin table's checks (pin_map.h, pin_map_test.cpp) on the host and in the firmware
 // build; nothing reads it at run time. Freestanding: <stdint.h> only.

@@ -16,6 +16,7 @@ inline constexpr uint32_t kDirSet = 0x08;
 inline constexpr uint32_t kOutClr = 0x14;
 inline constexpr uint32_t kOutSet = 0x18;
 inline constexpr uint32_t kIn = 0x20;
+inline constexpr uint32_t kCtrl = 0x24;    // SAMPLING: bit n = continuous sampling of pin n
 inline constexpr uint32_t kPmux = 0x30;    // one byte per pin pair: even pin 3:0, odd pin 7:4
 inline constexpr uint32_t kPinCfg = 0x40;  // one byte per pin
 inline constexpr uint32_t kPinCfgPmuxEn = 1u << 0;

@@ -1,11 +1,11 @@
 // Board variant "bench": the pin map this port used before the LED strip evidence was found
-// (docs/firmware.md up to protocol 3), kept for benches wired to that table. Only the UART and
+// (docs/firmware.md before board variants), kept for benches wired to that table. Only the UART and
 // the DRV8711 bus agree with the seed's board; the strips are on pins the seed's LED library
 // cannot drive, so on the seed's board this variant drives the emergency switch and tilt servo
 // pins against the strips' data lines. Build with -DHMC_BOARD=bench.
 #pragma once
 
-#include "pin_map.h"
+#include "../pin_map.h"
 
 namespace hmc::samd21::boards {
 

@@ -2,9 +2,9 @@
 // a header beside this one with its table, listed in kVariants below.
 #pragma once
 
-#include "boards/bench.h"
-#include "boards/seed.h"
-#include "pin_map.h"
+#include "bench.h"
+#include "seed.h"
+#include "../pin_map.h"
 
 namespace hmc::samd21::boards {
 

@@ -11,7 +11,7 @@
 // PA12/PB10/PB11, function D; the 32.768 kHz crystal on PA00/PA01; native USB on PA24/PA25).
 #pragma once
 
-#include "pin_map.h"
+#include "../pin_map.h"
 
 namespace hmc::samd21::boards {
 

@@ -42,7 +42,7 @@
 #include <string>
 #include <vector>
 
-#include "core/protocol_facts.h"
+#include "hmc/protocol_facts.h"
 #include "hmc/command.h"
 #include "hmc/motion_file.h"
 #include "hmc/result.h"

@@ -17,7 +17,7 @@
 #include <string_view>
 #include <vector>
 
-#include "core/crc16.h"
+#include "hmc/crc16.h"
 #include "hmc/command.h"
 #include "hmc/result.h"
 

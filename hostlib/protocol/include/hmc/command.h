@@ -13,8 +13,8 @@
 #include <string_view>
 #include <variant>
 
-#include "core/crc16.h"
-#include "core/protocol_facts.h"
+#include "hmc/crc16.h"
+#include "hmc/protocol_facts.h"
 
 namespace hmc {
 

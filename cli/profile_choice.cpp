@@ -1,0 +1,100 @@
+// The machine profile chosen, loaded once per run, and its link settings applied.
+#include "profile_choice.h"
+
+#include <sys/stat.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <optional>
+
+#include "exit_codes.h"
+
+namespace hmc::cli {
+namespace {
+
+bool given(const CLI::Option* option) { return option != nullptr && option->count() > 0; }
+
+bool file_exists(const std::string& path) {
+  struct stat info {};
+  return stat(path.c_str(), &info) == 0;
+}
+
+}  // namespace
+
+Result<ProfileChoice> choose_profile(const GlobalOptions& o) {
+  if (!o.profile.empty()) return ProfileChoice{o.profile, "--profile", file_exists(o.profile)};
+  if (const char* env = std::getenv("HMC_PROFILE"); env != nullptr && env[0] != '\0') {
+    return ProfileChoice{env, "HMC_PROFILE", file_exists(env)};
+  }
+  Result<std::string> path = default_profile_path();
+  if (!path) return path.error();
+  return ProfileChoice{*path, "default", file_exists(*path)};
+}
+
+int report_profile_error(const GlobalOptions& o, const ProfileError& error) {
+  if (o.json) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const ProfileMistake& m : error.mistakes) {
+      list.push_back({{"file", error.path}, {"line", m.place.line}, {"column", m.place.column}, {"message", m.message}});
+    }
+    std::cout << nlohmann::json{{"errors", list}, {"syntax", error.syntax}} << '\n';
+  } else {
+    std::cerr << error.text();
+    if (!error.unreadable) {
+      std::cerr << error.mistakes.size() << (error.mistakes.size() == 1 ? " error" : " errors") << " in the profile"
+                << (error.syntax ? " (a syntax error hides any after it)" : "") << "; nothing was sent\n";
+    }
+  }
+  return error.unreadable ? kExitIo : kExitInvalid;
+}
+
+Result<const Profile*, int> use_profile(const GlobalOptions& o) {
+  // One run, one profile: loaded at its first use and kept.
+  static std::optional<Result<const Profile*, int>> loaded;
+  static std::optional<Profile> profile;
+  if (loaded) return *loaded;
+  Result<ProfileChoice> choice = choose_profile(o);
+  if (!choice) {
+    loaded = Result<const Profile*, int>(static_cast<const Profile*>(nullptr));
+    return *loaded;  // no HOME and none named: no profile
+  }
+  if (!choice->exists && choice->from == "default") {
+    loaded = Result<const Profile*, int>(static_cast<const Profile*>(nullptr));
+    return *loaded;
+  }
+  Result<Profile, ProfileError> read = load_profile(choice->path);
+  if (!read) {
+    loaded = Result<const Profile*, int>(report_profile_error(o, read.error()));
+    return *loaded;
+  }
+  profile = std::move(*read);
+  loaded = Result<const Profile*, int>(static_cast<const Profile*>(&*profile));
+  return *loaded;
+}
+
+Result<GlobalOptions, int> with_profile_link(const GlobalOptions& o) {
+  Result<const Profile*, int> p = use_profile(o);
+  if (!p) return p.error();
+  GlobalOptions out = o;
+  if (*p == nullptr) return out;
+  const Profile& profile = **p;
+  if (!given(o.port_option) && profile.port) out.port = *profile.port;
+  if (!given(o.baud_option) && profile.baud) out.baud = *profile.baud;
+  if (!given(o.firmware_option) && profile.firmware) out.firmware = *profile.firmware;
+  return out;
+}
+
+std::string number_text(double value, int decimals) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.*f", decimals, value);
+  std::string s = text;
+  if (s.find('.') != std::string::npos) {
+    while (s.back() == '0') s.pop_back();
+    if (s.back() == '.') s.pop_back();
+  }
+  return s == "-0" ? "0" : s;
+}
+
+}  // namespace hmc::cli

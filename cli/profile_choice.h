@@ -1,0 +1,36 @@
+// Which machine profile a run uses, loaded once, and what the command line takes from it: the
+// port, baud and firmware kind when the command line does not give them, and axes by name.
+#pragma once
+
+#include <string>
+
+#include "connection.h"
+#include "hmc/profile.h"
+
+namespace hmc::cli {
+
+struct ProfileChoice {
+  std::string path;
+  std::string from;  // "--profile", "HMC_PROFILE" or "default"
+  bool exists = false;
+};
+
+// --profile, else HMC_PROFILE, else the default path ($XDG_CONFIG_HOME/hmc/config.toml).
+Result<ProfileChoice> choose_profile(const GlobalOptions& options);
+
+// The profile in use, loaded and checked on first use: nullptr when none is named and the
+// default file does not exist. A profile named but missing, or with mistakes, prints them (JSON
+// with --json) and gives the exit code: nothing is sent to a board.
+Result<const Profile*, int> use_profile(const GlobalOptions& options);
+
+// Prints a profile's mistakes ("file:line:col: message", then the count) and returns the exit code.
+int report_profile_error(const GlobalOptions& options, const ProfileError& error);
+
+// The global options with the port, baud and firmware the profile gives where the command line
+// (or HMC_PORT) gave none.
+Result<GlobalOptions, int> with_profile_link(const GlobalOptions& options);
+
+// A number for people: at most `decimals` decimals, trailing zeros dropped ("250", "26.667").
+std::string number_text(double value, int decimals = 3);
+
+}  // namespace hmc::cli

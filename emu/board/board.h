@@ -1,0 +1,50 @@
+// The devices on the emulated board's pins, wired as firmware/targets/samd21/board.h says (the
+// one pin map; the emulator reads the same header): three DRV8711 drivers on the SPI bus with
+// their STEP/DIR inputs turned into axis positions, the switches, the servos on TCC0, the
+// SK6812 strips on their SPI data lines.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace hmc::emu {
+
+class Chip;
+
+class Board {
+ public:
+  struct Axis {
+    int64_t position = 0;  // microsteps, forward positive
+    uint64_t steps = 0;    // STEP rising edges seen
+  };
+  struct Drv8711 {
+    std::array<uint16_t, 8> regs{};
+    uint8_t received = 0;  // bytes of the current 16-bit frame
+    uint16_t frame = 0;
+    bool write_pending = false;
+  };
+
+  explicit Board(Chip& chip);
+  // PORT outputs changed (group, before, after).
+  void outputs_changed(unsigned group, uint32_t before, uint32_t after);
+  // One byte out of SERCOM `sercom`'s SPI master; returns the byte on MISO.
+  uint8_t spi_exchange(unsigned sercom, uint8_t mosi);
+  void servos_changed() {}
+  // Switches by name: "limit1-", "limit1+", "limit2-", "limit2+", "emergency".
+  bool set_switch(const std::string& name, bool pressed);
+
+  const Axis& axis(unsigned motor) const { return axes_[motor]; }
+  const Drv8711& driver(unsigned chip) const { return drivers_[chip]; }
+  // SK6812 bytes each strip's data line carried since the last take (raw SPI bytes).
+  std::vector<uint8_t> take_strip_bytes(unsigned strip);
+
+ private:
+  Chip& chip_;
+  std::array<Axis, 3> axes_{};
+  std::array<Drv8711, 3> drivers_{};
+  std::array<std::vector<uint8_t>, 2> strip_bytes_{};
+};
+
+}  // namespace hmc::emu

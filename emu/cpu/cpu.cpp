@@ -1,0 +1,363 @@
+// The Cortex-M0+ on Unicorn (cpu.h). Exception entry and return: ARMv6-M Architecture
+// Reference Manual B1.5.6 (the 8-word frame, 8-byte stack alignment with xPSR bit 9) and
+// B1.5.8 (EXC_RETURN: 0xFFFFFFF1 handler mode, 0xFFFFFFF9 thread mode on the main stack).
+#include "cpu.h"
+
+#include <cstdio>
+#include <cstring>
+
+#include "../chip/scs.h"
+#include "cycles.h"
+
+namespace hmc::emu {
+namespace {
+
+constexpr uint32_t kFlashBase = 0x00000000, kFlashSize = 256 * 1024;
+constexpr uint32_t kNvmRowsBase = 0x00800000, kNvmRowsSize = 0x8000;
+constexpr uint32_t kRamBase = 0x20000000, kRamSize = 32 * 1024;
+// The peripheral regions the chip dispatches (SAMD21 datasheet 9.2).
+constexpr uint32_t kRegions[][2] = {{0x40000000, 0x10000}, {0x41000000, 0x10000},
+                                    {0x42000000, 0x10000}, {0x60000000, 0x400},
+                                    {0xE000E000, 0x1000}};
+// NVM software calibration row (datasheet 9.5, Table 9-4): DFLL48M COARSE CAL in bits 63:58,
+// word 0x00806024 bits 31:26. The value is a guess (each chip has its own): 0x1E, near the
+// middle of the range; the image falls back to 0x1F only for an erased row.
+constexpr uint32_t kDfllCoarseWord = 0x00806024;
+constexpr uint32_t kDfllCoarseGuess = 0x1E;
+// DDI0484C 3.3: 15 cycles from an interrupt to its handler's first instruction (zero wait
+// states). The return's cost is not in the manual: 13 cycles is a guess (the 8-word unstack).
+constexpr uint64_t kEntryCycles = 15, kReturnCycles = 13;
+constexpr uint32_t kExceptionExit = 8;  // Unicorn's interrupt number for an EXC_RETURN branch
+
+std::string hex(uint32_t v) {
+  char text[16];
+  std::snprintf(text, sizeof text, "0x%08X", v);
+  return text;
+}
+
+const char* fault_name(uint32_t intno) {
+  switch (intno) {
+    case 1: return "undefined instruction";
+    case 2: return "SVC with no handler modelled";
+    case 3: return "instruction fetch abort";
+    case 4: return "data abort";
+    case 7: return "breakpoint";
+    case 18: return "invalid state (a branch to an even address: ARM state)";
+    case 22: return "unaligned access";
+    default: return "exception";
+  }
+}
+
+}  // namespace
+
+Cpu::Cpu(Chip& chip, const ElfImage& image, const CpuOptions& options)
+    : chip_(chip), image_(image), options_(options) {}
+
+Cpu::~Cpu() {
+  if (uc_ != nullptr) uc_close(uc_);
+}
+
+uint32_t Cpu::reg(int id) const {
+  uint32_t value = 0;
+  uc_reg_read(uc_, id, &value);
+  return value;
+}
+
+void Cpu::set_reg(int id, uint32_t value) { uc_reg_write(uc_, id, &value); }
+
+uint32_t Cpu::pc() const { return reg(UC_ARM_REG_PC); }
+
+std::string Cpu::where(uint32_t address) const {
+  return image_.function_at(address) + " (" + hex(address) + ")";
+}
+
+bool Cpu::read(uint32_t address, void* bytes, uint32_t count) {
+  const bool in_ram = address >= kRamBase && address - kRamBase + uint64_t{count} <= kRamSize;
+  const bool in_flash = address + uint64_t{count} <= kFlashSize;
+  return (in_ram || in_flash) && uc_mem_read(uc_, address, bytes, count) == UC_ERR_OK;
+}
+
+bool Cpu::write(uint32_t address, const void* bytes, uint32_t count) {
+  const bool in_ram = address >= kRamBase && address - kRamBase + uint64_t{count} <= kRamSize;
+  return in_ram && uc_mem_write(uc_, address, bytes, count) == UC_ERR_OK;
+}
+
+bool Cpu::init(std::string& error) {
+  uc_err err = uc_open(UC_ARCH_ARM, static_cast<uc_mode>(UC_MODE_THUMB | UC_MODE_MCLASS), &uc_);
+  if (err != UC_ERR_OK) {
+    error = std::string("cannot start the CPU engine: ") + uc_strerror(err);
+    return false;
+  }
+  err = uc_ctl_set_cpu_model(uc_, UC_CPU_ARM_CORTEX_M0);
+  const auto map = [&](uint32_t base, uint32_t size, uint32_t perms) {
+    if (err == UC_ERR_OK) err = uc_mem_map(uc_, base, size, perms);
+  };
+  map(kFlashBase, kFlashSize, UC_PROT_READ | UC_PROT_EXEC);
+  map(kNvmRowsBase, kNvmRowsSize, UC_PROT_READ);
+  map(kRamBase, kRamSize, UC_PROT_ALL);
+  if (err != UC_ERR_OK) {
+    error = std::string("cannot map the chip's memory: ") + uc_strerror(err);
+    return false;
+  }
+  for (const auto& region : kRegions) {
+    regions_.push_back(std::make_unique<MmioRegion>(MmioRegion{this, region[0]}));
+    err = uc_mmio_map(uc_, region[0], region[1], on_mmio_read, regions_.back().get(),
+                      on_mmio_write, regions_.back().get());
+    if (err != UC_ERR_OK) {
+      error = std::string("cannot map the peripheral regions: ") + uc_strerror(err);
+      return false;
+    }
+  }
+  // Erased flash and rows read as ones (datasheet 22.6.4.1).
+  std::vector<uint8_t> erased(kFlashSize, 0xFF);
+  uc_mem_write(uc_, kFlashBase, erased.data(), kFlashSize);
+  uc_mem_write(uc_, kNvmRowsBase, erased.data(), kNvmRowsSize);
+  uint32_t calibration = 0x03FFFFFFu | (kDfllCoarseGuess << 26);
+  uc_mem_write(uc_, kDfllCoarseWord, &calibration, 4);
+
+  for (const Segment& s : image_.segments) {
+    if (s.address < kFlashBase || uint64_t{s.address} + s.bytes.size() > kFlashSize) {
+      error = "the image has bytes at " + hex(s.address) + ", outside the SAMD21G18's 256 KB "
+              "flash: linked for another chip or address";
+      return false;
+    }
+    uc_mem_write(uc_, s.address, s.bytes.data(), s.bytes.size());
+  }
+  chip_.set_memory(this);
+
+  // One fixed exit address (never reached: it is not in the chip's memory map), set once:
+  // uc_emu_start's own `until` would invalidate translations at every start.
+  uint64_t exits[] = {0xFFFFFFFEu};
+  if (err == UC_ERR_OK) err = uc_ctl_exits_enable(uc_);
+  if (err == UC_ERR_OK) err = uc_ctl_set_exits(uc_, exits, 1);
+  if (err != UC_ERR_OK) {
+    error = std::string("cannot configure the CPU engine: ") + uc_strerror(err);
+    return false;
+  }
+  uc_hook hook;
+  uc_hook_add(uc_, &hook, UC_HOOK_BLOCK, reinterpret_cast<void*>(on_block), this, 1, 0);
+  hooks_.push_back(hook);
+  uc_hook_add(uc_, &hook, UC_HOOK_INTR, reinterpret_cast<void*>(on_interrupt), this, 1, 0);
+  hooks_.push_back(hook);
+  uc_hook_add(uc_, &hook, UC_HOOK_MEM_INVALID, reinterpret_cast<void*>(on_invalid), this, 1, 0);
+  hooks_.push_back(hook);
+  return true;
+}
+
+bool Cpu::reset(uint32_t vector_table, std::string& error) {
+  uint32_t words[2];
+  if (!read(vector_table, words, 8)) {
+    error = "no vector table at " + hex(vector_table);
+    return false;
+  }
+  const uint32_t sp = words[0], entry = words[1];
+  if (sp < kRamBase || sp > kRamBase + kRamSize || (sp & 3) != 0) {
+    error = "the vector table at " + hex(vector_table) + " gives initial SP " + hex(sp) +
+            ", not in the SAMD21G18's RAM (0x20000000-0x20008000)";
+    return false;
+  }
+  if ((entry & 1) == 0 || (entry & ~1u) >= kFlashSize || (entry & ~1u) < vector_table) {
+    error = "the vector table at " + hex(vector_table) + " gives reset handler " + hex(entry) +
+            ", not a Thumb address in the image's flash";
+    return false;
+  }
+  active_.clear();
+  chip_.scs().reset();
+  chip_.scs().set_vtor(vector_table);
+  set_reg(UC_ARM_REG_IPSR, 0);
+  set_reg(UC_ARM_REG_PRIMASK, 0);
+  set_reg(UC_ARM_REG_CONTROL, 0);
+  set_reg(UC_ARM_REG_MSP, sp);
+  set_reg(UC_ARM_REG_SP, sp);
+  set_reg(UC_ARM_REG_LR, 0xFFFFFFFF);
+  set_reg(UC_ARM_REG_PC, entry);
+  return true;
+}
+
+// Each translated block is costed once; flash blocks by their start address in a flat table.
+uint32_t Cpu::block_cost(uint64_t address, uint32_t size) {
+  BlockCost* cached = address < kFlashSize ? &flash_costs_[address / 2] : nullptr;
+  if (cached != nullptr && cached->size == size) return cached->cycles;
+  std::vector<uint8_t> code(size);
+  uint32_t cost = size / 2;
+  if (uc_mem_read(uc_, address, code.data(), size) == UC_ERR_OK) {
+    cost = thumb_block_cycles(code.data(), size);
+  }
+  if (cached != nullptr && size <= UINT16_MAX && cost <= UINT16_MAX) {
+    *cached = BlockCost{static_cast<uint16_t>(size), static_cast<uint16_t>(cost)};
+  }
+  return cost;
+}
+
+void Cpu::on_block(uc_engine*, uint64_t address, uint32_t size, void* user) {
+  Cpu& cpu = *static_cast<Cpu*>(user);
+  Chip& chip = cpu.chip_;
+  cpu.block_address_ = static_cast<uint32_t>(address);
+  chip.charge_cycles(cpu.block_cost(address, size));
+  if (chip.reschedule_requested() && !chip.stopped()) {
+    // A register write moved a peripheral's next event or the CPU clock: catch up and take the
+    // new deadline without leaving the engine (no CPU state changes here).
+    chip.advance();
+    cpu.set_deadline();
+  }
+  if (chip.stopped() || chip.cycles() >= cpu.deadline_cycles_) {
+    uc_emu_stop(cpu.uc_);
+    return;
+  }
+  if (chip.take_irq_dirty()) {
+    const bool primask = (cpu.reg(UC_ARM_REG_PRIMASK) & 1) != 0;
+    if (chip.scs().ready_exception(primask) != 0) {
+      uc_emu_stop(cpu.uc_);
+    } else if (primask && chip.scs().ready_exception(false) != 0) {
+      chip.irq_changed();  // masked for now: look again at the next block (CPSIE)
+    }
+  }
+}
+
+uint64_t Cpu::on_mmio_read(uc_engine*, uint64_t offset, unsigned size, void* user) {
+  const MmioRegion& region = *static_cast<MmioRegion*>(user);
+  Cpu& cpu = *region.cpu;
+  const uint32_t value = cpu.chip_.bus_read(region.base + static_cast<uint32_t>(offset), size);
+  if (cpu.chip_.stopped()) uc_emu_stop(cpu.uc_);
+  return value;
+}
+
+void Cpu::on_mmio_write(uc_engine*, uint64_t offset, unsigned size, uint64_t value, void* user) {
+  const MmioRegion& region = *static_cast<MmioRegion*>(user);
+  Cpu& cpu = *region.cpu;
+  cpu.chip_.bus_write(region.base + static_cast<uint32_t>(offset), static_cast<uint32_t>(value),
+                      size);
+  if (cpu.chip_.stopped()) uc_emu_stop(cpu.uc_);
+}
+
+bool Cpu::on_invalid(uc_engine*, uc_mem_type type, uint64_t address, int size, int64_t,
+                     void* user) {
+  Cpu& cpu = *static_cast<Cpu*>(user);
+  const char* what = "access to";
+  switch (type) {
+    case UC_MEM_WRITE_PROT: what = "write to read-only memory (flash is written through NVMCTRL) at"; break;
+    case UC_MEM_FETCH_UNMAPPED: case UC_MEM_FETCH_PROT: what = "instruction fetch from"; break;
+    case UC_MEM_READ_UNMAPPED: what = "read of unmapped"; break;
+    case UC_MEM_WRITE_UNMAPPED: what = "write to unmapped"; break;
+    default: break;
+  }
+  cpu.chip_.violation(std::string(what) + " " + hex(static_cast<uint32_t>(address)) + " (" +
+                      std::to_string(size) + " bytes)");
+  return false;
+}
+
+void Cpu::on_interrupt(uc_engine*, uint32_t intno, void* user) {
+  Cpu& cpu = *static_cast<Cpu*>(user);
+  if (intno == kExceptionExit) {
+    cpu.return_from_exception();
+  } else if (cpu.options_.run_fault_handler) {
+    cpu.enter_exception(Scs::kHardFault);
+  } else {
+    cpu.chip_.violation(std::string("HardFault: ") + fault_name(intno) + " (engine exception " +
+                        std::to_string(intno) + ")");
+  }
+  uc_emu_stop(cpu.uc_);
+}
+
+// B1.5.6: push R0-R3, R12, LR, the return address and xPSR on the current (main) stack,
+// 8-byte aligned; LR takes EXC_RETURN, IPSR the exception number, PC the vector.
+void Cpu::enter_exception(unsigned exception) {
+  const uint32_t ipsr = reg(UC_ARM_REG_IPSR) & 0x3F;
+  if ((reg(UC_ARM_REG_CONTROL) & 2) != 0) {
+    chip_.violation("exception taken on the process stack (CONTROL.SPSEL): not modelled");
+    return;
+  }
+  uint32_t sp = reg(UC_ARM_REG_SP);
+  uint32_t xpsr = reg(UC_ARM_REG_XPSR) | (1u << 24);
+  if ((sp & 4) != 0) {
+    sp -= 4;
+    xpsr |= 1u << 9;
+  } else {
+    xpsr &= ~(1u << 9);
+  }
+  sp -= 32;
+  const uint32_t frame[8] = {reg(UC_ARM_REG_R0), reg(UC_ARM_REG_R1), reg(UC_ARM_REG_R2),
+                             reg(UC_ARM_REG_R3), reg(UC_ARM_REG_R12), reg(UC_ARM_REG_LR),
+                             reg(UC_ARM_REG_PC), xpsr};
+  if (!write(sp, frame, sizeof frame)) {
+    chip_.violation("stack overflow: exception frame at " + hex(sp) + " is outside RAM");
+    return;
+  }
+  uint32_t vector = 0;
+  if (!read(chip_.scs().vtor() + 4 * exception, &vector, 4) || (vector & 1) == 0) {
+    chip_.violation("vector " + std::to_string(exception) + " at VTOR " +
+                    hex(chip_.scs().vtor()) + " is not a Thumb address in flash: " + hex(vector));
+    return;
+  }
+  set_reg(UC_ARM_REG_SP, sp);
+  set_reg(UC_ARM_REG_LR, ipsr != 0 ? 0xFFFFFFF1u : 0xFFFFFFF9u);
+  set_reg(UC_ARM_REG_IPSR, exception);
+  set_reg(UC_ARM_REG_PC, vector);
+  chip_.scs().acknowledge(exception);
+  chip_.charge_cycles(kEntryCycles);
+  active_.push_back(Active{exception, chip_.cycles()});
+}
+
+// B1.5.8: unstack the frame from the main stack, undo the alignment word, back to the
+// interrupted context.
+void Cpu::return_from_exception() {
+  const uint32_t exc_return = reg(UC_ARM_REG_PC) | 1u;
+  if (exc_return != 0xFFFFFFF1u && exc_return != 0xFFFFFFF9u) {
+    chip_.violation("EXC_RETURN " + hex(exc_return) + ": only the main stack is modelled");
+    return;
+  }
+  uint32_t sp = reg(UC_ARM_REG_SP);
+  uint32_t frame[8];
+  if (!read(sp, frame, sizeof frame)) {
+    chip_.violation("exception return with the stack at " + hex(sp) + ", outside RAM");
+    return;
+  }
+  sp += 32;
+  if ((frame[7] & (1u << 9)) != 0) sp += 4;
+  chip_.charge_cycles(kReturnCycles);
+  if (!active_.empty()) {
+    const Active done = active_.back();
+    active_.pop_back();
+    HandlerFigures& figures = handler_figures_[done.exception];
+    ++figures.count;
+    figures.cycles += chip_.cycles() - done.entered_cycles + kEntryCycles;
+    chip_.scs().complete(done.exception);
+  }
+  set_reg(UC_ARM_REG_R0, frame[0]);
+  set_reg(UC_ARM_REG_R1, frame[1]);
+  set_reg(UC_ARM_REG_R2, frame[2]);
+  set_reg(UC_ARM_REG_R3, frame[3]);
+  set_reg(UC_ARM_REG_R12, frame[4]);
+  set_reg(UC_ARM_REG_LR, frame[5]);
+  set_reg(UC_ARM_REG_SP, sp);
+  set_reg(UC_ARM_REG_APSR, frame[7] & 0xF8000000u);
+  set_reg(UC_ARM_REG_IPSR, frame[7] & 0x3F);
+  set_reg(UC_ARM_REG_PC, frame[6] | 1u);  // bit 0 keeps the engine in Thumb state
+}
+
+void Cpu::set_deadline() {
+  const uint64_t ps = chip_.next_event_ps() < until_ps_ ? chip_.next_event_ps() : until_ps_;
+  deadline_cycles_ = chip_.cycles_at(ps);
+}
+
+void Cpu::run_until(uint64_t until_ps) {
+  while (!chip_.stopped() && chip_.now_ps() < until_ps) {
+    chip_.advance();
+    if (chip_.stopped()) break;
+    const bool primask = (reg(UC_ARM_REG_PRIMASK) & 1) != 0;
+    if (const unsigned e = chip_.scs().ready_exception(primask); e != 0) {
+      enter_exception(e);
+      if (chip_.stopped()) break;
+    }
+    until_ps_ = until_ps;
+    set_deadline();
+    chip_.take_irq_dirty();
+    ++chunks_;
+    const uc_err err = uc_emu_start(uc_, pc() | 1u, 0xFFFFFFFFu, 0, 0);
+    if (err != UC_ERR_OK && !chip_.stopped()) {
+      chip_.violation(std::string("the CPU stopped: ") + uc_strerror(err));
+    }
+  }
+}
+
+}  // namespace hmc::emu

@@ -1,0 +1,101 @@
+// The Cortex-M0+ core on the Unicorn engine (Cortex-M0 model, Thumb-only ARMv6-M): flash, RAM
+// and the NVM rows as memory, the peripheral regions dispatched to the chip, and the exception
+// model Unicorn 2.0.1 lacks: the emulator checks for a ready exception between chunks of
+// instructions (a chunk ends at the next peripheral event or when an access may have changed
+// an interrupt), pushes the frame and enters the handler itself, and unstacks on the
+// EXC_RETURN branch, which Unicorn reports as interrupt 8. Tail-chaining and late arrival are
+// not modelled: each return unstacks fully, and a pending exception is taken after it.
+#pragma once
+
+#include <unicorn/unicorn.h>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <vector>
+#include <string>
+
+#include "../chip/chip.h"
+#include "../elf/elf_image.h"
+
+namespace hmc::emu {
+
+struct CpuOptions {
+  bool run_fault_handler = false;  // false: a HardFault stops the emulator as an error
+};
+
+class Cpu : public Memory {
+ public:
+  Cpu(Chip& chip, const ElfImage& image, const CpuOptions& options);
+  ~Cpu() override;
+  Cpu(const Cpu&) = delete;
+  Cpu& operator=(const Cpu&) = delete;
+
+  // Maps memory, loads the image, installs the hooks. False with `error` on failure.
+  bool init(std::string& error);
+  // Reset: SP and PC from the vector table at `vector_table` (ARMv6-M B1.5.5).
+  bool reset(uint32_t vector_table, std::string& error);
+  // Runs until virtual time reaches `until_ps` or the chip stops (a violation, a reset).
+  void run_until(uint64_t until_ps);
+
+  uint32_t pc() const;
+  // "function+0x12 (0x000021A4)".
+  std::string where(uint32_t address) const;
+
+  // Cycles spent in each exception's handler, entry and return included.
+  struct HandlerFigures {
+    uint64_t count = 0;
+    uint64_t cycles = 0;
+  };
+  const std::map<unsigned, HandlerFigures>& handler_figures() const { return handler_figures_; }
+
+  // How many times the engine was started (each chunk of instructions).
+  uint64_t chunks() const { return chunks_; }
+
+  bool read(uint32_t address, void* bytes, uint32_t count) override;
+  bool write(uint32_t address, const void* bytes, uint32_t count) override;
+
+ private:
+  static void on_block(uc_engine* uc, uint64_t address, uint32_t size, void* user);
+  static void on_interrupt(uc_engine* uc, uint32_t intno, void* user);
+  static bool on_invalid(uc_engine* uc, uc_mem_type type, uint64_t address, int size,
+                         int64_t value, void* user);
+  static uint64_t on_mmio_read(uc_engine* uc, uint64_t offset, unsigned size, void* user);
+  static void on_mmio_write(uc_engine* uc, uint64_t offset, unsigned size, uint64_t value,
+                            void* user);
+
+  void enter_exception(unsigned exception);
+  void return_from_exception();
+  uint32_t reg(int id) const;
+  void set_reg(int id, uint32_t value);
+  uint32_t block_cost(uint64_t address, uint32_t size);
+
+  Chip& chip_;
+  const ElfImage& image_;
+  CpuOptions options_;
+  uc_engine* uc_ = nullptr;
+  void set_deadline();
+  uint64_t deadline_cycles_ = 0;  // the chunk ends at this cycle count
+  uint64_t until_ps_ = 0;
+  uint64_t chunks_ = 0;
+  uint32_t block_address_ = 0;
+  struct BlockCost {
+    uint16_t size = 0;
+    uint16_t cycles = 0;
+  };
+  std::vector<BlockCost> flash_costs_ = std::vector<BlockCost>(256 * 1024 / 2);
+  struct Active {
+    unsigned exception;
+    uint64_t entered_cycles;
+  };
+  std::vector<Active> active_;
+  std::map<unsigned, HandlerFigures> handler_figures_;
+  std::vector<uc_hook> hooks_;
+  struct MmioRegion {
+    Cpu* cpu;
+    uint32_t base;
+  };
+  std::vector<std::unique_ptr<MmioRegion>> regions_;
+};
+
+}  // namespace hmc::emu

@@ -1,0 +1,277 @@
+// hmc-emu: the SAMD21 board emulator. Runs the exact firmware image (the ELF the firmware preset
+// builds) on an emulated Cortex-M0+ with the chip's peripherals and the board's devices, and
+// serves the command UART (SERCOM5) on standard input/output or a pseudo-terminal, in real or
+// unthrottled ("fast") virtual time. docs/emu.md describes what is modelled.
+#include <poll.h>
+#include <signal.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cinttypes>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <optional>
+
+#include "board/board.h"
+#include "chip/chip.h"
+#include "chip/port.h"
+#include "chip/sercom.h"
+#include "chip/system.h"
+#include "cpu/cpu.h"
+#include "elf/elf_image.h"
+#include "sim_io.h"
+
+namespace hmc::emu {
+namespace {
+
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitUsage = 2,      // a bad option
+  kExitIo = 3,         // the image file or the pseudo-terminal could not be used
+  kExitImage = 4,      // not a SAMD21 image: not ARM, linked elsewhere, a bad vector table
+  kExitViolation = 5,  // the image broke a rule of the chip, faulted, or the watchdog expired
+  kExitTimeLimit = 6,  // --max-time reached
+};
+
+constexpr uint64_t kPsPerMs = 1000000000ull;
+constexpr unsigned kUartSercom = 5;  // the command UART (firmware/targets/samd21/board.h)
+constexpr uint32_t kAppBase = 0x2000;  // behind the bootloader (HARDWARE.md)
+
+volatile sig_atomic_t g_stop = 0;
+void request_stop(int) { g_stop = 1; }
+
+struct Options {
+  std::string image;
+  bool pty = false;
+  bool fast = false;
+  uint32_t baud = 115200;
+  double max_time_s = 0;
+  bool no_crystal = false;
+  std::string bootloader = "auto";  // auto, yes, no
+  bool watchdog_resets = false;
+  bool run_fault_handler = false;
+  bool quiet = false;
+  bool stats = false;
+};
+
+// One power cycle of the board: the chip, the CPU on it, the image in its flash.
+struct Machine {
+  std::unique_ptr<Chip> chip;
+  std::unique_ptr<Cpu> cpu;
+};
+
+std::string format_seconds(uint64_t ps) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6f s", static_cast<double>(ps) / 1e12);
+  return text;
+}
+
+class Emulator {
+ public:
+  Emulator(const Options& options, const ElfImage& image, sim::Link& link)
+      : options_(options), image_(image), link_(link) {}
+
+  bool power_on(uint8_t reset_cause, std::string& error) {
+    ChipOptions chip_options;
+    chip_options.crystal = !options_.no_crystal;
+    const uint32_t base = image_.lowest_address();
+    chip_options.after_bootloader =
+        options_.bootloader == "yes" || (options_.bootloader == "auto" && base == kAppBase);
+    chip_options.wire_baud = options_.baud;
+    chip_options.watchdog_resets = options_.watchdog_resets;
+    const uint64_t carried_ps = machine_.chip ? machine_.chip->now_ps() : 0;
+    machine_.cpu.reset();
+    booted_ = false;
+    machine_.chip = std::make_unique<Chip>(chip_options);
+    machine_.chip->pm().set_reset_cause(reset_cause);
+    time_offset_ps_ += carried_ps;
+    CpuOptions cpu_options;
+    cpu_options.run_fault_handler = options_.run_fault_handler;
+    machine_.cpu = std::make_unique<Cpu>(*machine_.chip, image_, cpu_options);
+    if (!machine_.cpu->init(error)) return false;
+    return machine_.cpu->reset(base, error);
+  }
+
+  uint64_t now_ps() const { return time_offset_ps_ + machine_.chip->now_ps(); }
+
+  int run() {
+    const auto origin = std::chrono::steady_clock::now();
+    const uint64_t limit =
+        options_.max_time_s > 0 ? static_cast<uint64_t>(options_.max_time_s * 1e12) : UINT64_MAX;
+    uint64_t quiet_since = 0;
+    bool input_ended = false;
+    while (g_stop == 0) {
+      uint64_t target = now_ps() + kPsPerMs;
+      if (!options_.fast) {
+        const auto wall = std::chrono::steady_clock::now() - origin;
+        target = static_cast<uint64_t>(
+                     std::chrono::duration_cast<std::chrono::nanoseconds>(wall).count()) * 1000u;
+      }
+      if (target > limit) target = limit;
+      if (target > now_ps()) machine_.cpu->run_until(target - time_offset_ps_);
+      Chip& chip = *machine_.chip;
+      Sercom& uart = chip.sercom(kUartSercom);
+      if (const std::string out = uart.take_output(); !out.empty()) {
+        link_.write(out);
+        quiet_since = now_ps();
+        if (out.find('\n') != std::string::npos) booted_ = true;
+      }
+      if (booted_ && !held_.empty()) {
+        uart.host_send(held_);
+        held_.clear();
+      }
+      if (!chip.violation_message().empty()) {
+        const uint32_t pc = machine_.cpu->pc();
+        std::cerr << "hmc-emu: stopped at " << format_seconds(now_ps()) << ": "
+                  << chip.violation_message() << "\nhmc-emu: PC in "
+                  << machine_.cpu->where(pc) << '\n';
+        return kExitViolation;
+      }
+      if (chip.reset_requested()) {
+        const uint8_t cause = static_cast<uint8_t>(chip.pm().read(0x38, 1));
+        if (!options_.quiet) {
+          std::cerr << "hmc-emu: chip reset at " << format_seconds(now_ps()) << " (RCAUSE 0x"
+                    << std::hex << unsigned{cause} << std::dec << ")\n";
+        }
+        std::string error;
+        if (!power_on(cause, error)) {
+          std::cerr << "hmc-emu: " << error << '\n';
+          return kExitImage;
+        }
+        continue;
+      }
+      if (now_ps() >= limit) {
+        std::cerr << "hmc-emu: --max-time reached at " << format_seconds(now_ps())
+                  << " of virtual time; PC in " << machine_.cpu->where(machine_.cpu->pc())
+                  << '\n';
+        return kExitTimeLimit;
+      }
+      // Standard input ended: finish once every byte is in and the answers have been quiet
+      // for 200 ms of virtual time.
+      if (input_ended && held_.empty() && !uart.receiving() && !uart.transmitting() &&
+          now_ps() - quiet_since > 200 * kPsPerMs) {
+        return kExitOk;
+      }
+      // Wait for input: not at all in fast mode, until the next millisecond in real time.
+      poll_.clear();
+      link_.arm(poll_);
+      std::vector<pollfd>& fds = poll_.fds();
+      int timeout_ms = options_.fast ? 0 : 1;
+      if (input_ended) timeout_ms = 0;
+      if (poll(fds.data(), fds.size(), timeout_ms) < 0) {
+        for (pollfd& fd : fds) fd.revents = 0;
+      }
+      const std::string in = link_.service(poll_);
+      if (!in.empty()) {
+        // Until the board's first line (its boot event) the host's bytes wait: on the board
+        // they would reach a receiver not yet enabled and be lost (docs/emu.md).
+        if (booted_) uart.host_send(in);
+        else held_ += in;
+        quiet_since = now_ps();
+      }
+      if (link_.detached() && link_.ends_at_detach() && !input_ended) {
+        input_ended = true;
+        quiet_since = now_ps();
+      }
+    }
+    return kExitOk;
+  }
+
+  const Machine& machine() const { return machine_; }
+
+ private:
+  const Options& options_;
+  const ElfImage& image_;
+  sim::Link& link_;
+  Machine machine_;
+  uint64_t time_offset_ps_ = 0;
+  sim::PollSet poll_;
+  bool booted_ = false;  // the board has sent its first line since power-on
+  std::string held_;     // host bytes waiting for it
+};
+
+int run(const Options& options) {
+  ElfImage image;
+  std::string error;
+  if (!load_elf(options.image, image, error)) {
+    std::cerr << "hmc-emu: " << error << '\n';
+    return errno == ENOENT || error.rfind("cannot read", 0) == 0 ? kExitIo : kExitImage;
+  }
+  const uint32_t base = image.lowest_address();
+  if (base != 0 && base != kAppBase) {
+    std::cerr << "hmc-emu: '" << options.image << "' is linked at 0x" << std::hex << base
+              << std::dec << ": a SAMD21 image starts at 0x0 (no bootloader) or 0x2000 (behind "
+              << "the bootloader)\n";
+    return kExitImage;
+  }
+  sim::Result<std::unique_ptr<sim::Link>> link =
+      options.pty ? sim::open_pty_link(options.quiet ? nullptr : &std::cerr)
+                  : sim::open_stdio_link();
+  if (!link) {
+    std::cerr << "hmc-emu: " << link.error << '\n';
+    return kExitIo;
+  }
+  if (const std::string text = (*link.value)->announcement(); !text.empty()) {
+    std::cerr << "hmc-emu: " << text << '\n' << std::flush;
+  }
+  signal(SIGINT, request_stop);
+  signal(SIGTERM, request_stop);
+  signal(SIGPIPE, SIG_IGN);
+
+  Emulator emulator(options, image, **link.value);
+  if (!emulator.power_on(Pm::kCausePowerOn, error)) {
+    std::cerr << "hmc-emu: " << error << '\n';
+    return kExitImage;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const int code = emulator.run();
+  if (options.stats) {
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const Machine& m = emulator.machine();
+    const double virtual_s = static_cast<double>(emulator.now_ps()) / 1e12;
+    std::fprintf(stderr, "hmc-emu: %.3f s virtual in %.3f s wall (%.2fx real time), %" PRIu64
+                         " cycles in %" PRIu64 " chunks\n", virtual_s, wall, virtual_s / wall,
+                 m.chip->cycles(), m.cpu->chunks());
+    for (const auto& [exception, figures] : m.cpu->handler_figures()) {
+      std::fprintf(stderr, "hmc-emu: exception %u: %" PRIu64 " entries, %.1f cycles each\n",
+                   exception, figures.count,
+                   static_cast<double>(figures.cycles) / static_cast<double>(figures.count));
+    }
+  }
+  return code;
+}
+
+}  // namespace
+}  // namespace hmc::emu
+
+int main(int argc, char** argv) {
+  hmc::emu::Options options;
+  CLI::App app{"hmc-emu: runs the SAMD21 firmware image on an emulated board (docs/emu.md)"};
+  app.add_option("image", options.image, "the firmware ELF (hmc-firmware.elf)")->required();
+  app.add_flag("--pty", options.pty, "serve the command UART on a new pseudo-terminal (its path is printed)");
+  app.add_flag("--fast", options.fast, "run virtual time unthrottled instead of in real time");
+  app.add_option("--baud", options.baud, "the host side's baud rate (the image's own is 115200)")
+      ->check(CLI::Range(300, 4000000));
+  app.add_option("--max-time", options.max_time_s,
+                 "stop after this many seconds of virtual time and say where the PC is")
+      ->check(CLI::PositiveNumber);
+  app.add_flag("--no-crystal", options.no_crystal, "no 32.768 kHz crystal on PA00/PA01");
+  app.add_option("--bootloader", options.bootloader,
+                 "start as the bootloader leaves the chip (yes), from a cold reset (no), or by the "
+                 "image's link address (auto: 0x2000 yes, 0x0 no)")
+      ->check(CLI::IsMember({"auto", "yes", "no"}));
+  app.add_flag("--watchdog-resets", options.watchdog_resets,
+               "a watchdog expiry resets the chip (default: it stops the emulator as an error)");
+  app.add_flag("--run-fault-handler", options.run_fault_handler,
+               "a HardFault runs the image's handler (default: it stops the emulator as an error)");
+  app.add_flag("--quiet", options.quiet, "no notes on standard error");
+  app.add_flag("--stats", options.stats, "print virtual/wall time and cycles per handler at the end");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : hmc::emu::kExitUsage;
+  }
+  return hmc::emu::run(options);
+}
