@@ -39,6 +39,8 @@ constexpr int kJournalVersion = 1;
 constexpr Ticks kFastSlice = sim::kPollTicks;
 // Real time: how long a read sleeps between catching the board up with the wall clock.
 constexpr auto kRealTimeSleep = std::chrono::milliseconds(1);
+// Fast: how far ahead of the link watchdog's deadline the reading host's keep-alive is sent.
+constexpr Ticks kWatchdogMargin = 5 * hal::kTicksPerMicrosecond * 1000;
 
 Ticks duration_ticks(std::chrono::nanoseconds duration) {
   const auto ns = static_cast<uint64_t>(std::max<int64_t>(duration.count(), 0));
@@ -235,11 +237,25 @@ class SimTransport final : public Transport {
     return Done{};
   }
 
+  // Fast virtual time outruns the host's keep-alives, which it sends in wall time. The host is
+  // this process, alive while it reads: a blank line is sent for it short of the watchdog's
+  // deadline, so an armed watchdog fires here only when the host stops reading (or is gone and
+  // the saved state is replayed), as on a board whose host keeps up.
+  Status keep_link_alive() {
+    const fw::Controller& controller = board_->controller();
+    if (controller.watchdog_ms() == 0 || board_->receiving() ||
+        board_->now() + kFastSlice + kWatchdogMargin < controller.watchdog_due()) {
+      return Done{};
+    }
+    return write("\n");
+  }
+
   Result<std::string> read(std::chrono::milliseconds timeout) override {
     std::string out = board_->take_output();
     if (options_.fast) {
       const Ticks end = board_->now() + duration_ticks(timeout);
       while (out.empty() && board_->now() < end) {
+        if (Status alive = keep_link_alive(); !alive) return alive.error();
         board_->run_until(std::min(board_->now() + kFastSlice, end));
         out = board_->take_output();
       }
