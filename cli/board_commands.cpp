@@ -531,7 +531,7 @@ void print_status(const Session& s) {
     std::cout << "The seed firmware reports nothing: the board's state is unknown to a new session.\n";
     return;
   }
-  std::cout << "last reset: " << last_reset_words(s) << "\n";
+  std::cout << "last reset: " << last_reset_words(s) << '\n';
   std::cout << "emergency switch: " << (model.board.emergency ? "PRESSED" : "released") << '\n';
   if (const std::optional<WatchdogStatus>& w = model.watchdog) {
     std::cout << "link watchdog: " << (w->timeout_ms == 0 ? std::string("off") : std::to_string(w->timeout_ms) + " ms")

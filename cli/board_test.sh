@@ -196,6 +196,7 @@ if port=$(tcp_port tcp) && cport=$(control_port tcp); then
   expect status-last-reset 0 '^last reset: power-on$' -- "$hmc" -p "$board" status
   expect status-last-reset-json 0 '"last_reset": \{' -- "$hmc" -p "$board" status --json
   expect send-reset-query 0 '^STR \(reply\): last reset: power-on$' -- "$hmc" -p "$board" send STA 8
+  expect send-watchdog-query 0 '^STW \(reply\): link watchdog off' -- "$hmc" -p "$board" send STA 7
   expect monitor-last-reset 0 "^the board's last reset: power-on$" -- "$hmc" -p "$board" monitor --duration 0.2
 
   # move --wait prints where the motor stopped; status agrees (JSON positions in 1/256 step).

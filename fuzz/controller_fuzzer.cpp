@@ -623,6 +623,8 @@ class Harness {
           fail_unless(st != nullptr, "STA 4 must be answered by STB");
           fail_unless(before.emergency != after.emergency || st->emergency == after.emergency,
                       "STB shows the wrong emergency switch state");
+        } else if (unit == proto::kUnitWatchdog) {
+          fail_unless(std::holds_alternative<hmc::WatchdogStatus>(reply), "STA 7 must be answered by STW");
         } else if (unit == proto::kUnitReset) {
           const auto* st = std::get_if<hmc::ResetStatus>(&reply);
           fail_unless(st != nullptr, "STA 8 must be answered by STR");

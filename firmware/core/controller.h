@@ -186,8 +186,8 @@ class Controller {
   Refusal limits(const LimitsCommand& command);
   void answer_version();
   void answer_status(uint8_t unit);
-  void send_reset(proto::BoardFrameId id);  // EVR or STR
   void check_watchdog(hal::Ticks now);
+  void send_reset(proto::BoardFrameId id);  // EVR or STR
   void check_switches();
   void check_drivers(hal::Ticks now);
   void run_timers(hal::Ticks now);

@@ -220,11 +220,14 @@ static_assert(kSettingHomeLocate == kSettingCount, "one SettingId per kSettings 
 inline constexpr uint32_t kUnitBoard = 4;        // switches, emergency, servos
 inline constexpr uint32_t kUnitFirstStrip = 5;   // 5 and 6: LED strips 1 and 2
 inline constexpr uint32_t kUnitWatchdog = kUnitFirstStrip + kStripCount;  // 7, protocol 3
-inline constexpr uint32_t kUnitReset = kUnitWatchdog + 1;  // 8: why the board last reset (protocol 4)
+inline constexpr uint32_t kUnitReset = kUnitWatchdog + 1;                  // 8: why the board last reset, protocol 4
+// The units every protocol-2 board answers; the later ones came with a feature (kFeatures'
+// status_unit), and a board older than the feature refuses its unit as out of range.
+inline constexpr uint32_t kUnitLastBase = kUnitFirstStrip + kStripCount - 1;  // 6
 
 inline constexpr FieldSpec kStatusFields[] = {
     {"unit", 1, kUnitReset, 0, 0, 0,
-     "1-3 a motor, 4 the board, 5-6 LED strip 1-2, 7 the link watchdog, 8 the last reset (protocol 4)"},
+     "1-3 a motor, 4 the board, 5-6 LED strip 1-2, 7 the link watchdog (protocol 3), 8 the last reset (protocol 4)"},
 };
 inline constexpr FieldSpec kSetFields[] = {
     {"motor", 1, kMotorCount, 0, 0, 0, "stepper 1-3"},
@@ -428,7 +431,7 @@ inline constexpr BoardFrameSpec kBoardFrames[] = {
     {"EVL", BoardFrameId::kLimitChanged, 3, kLimitChangedFields, "event: a limit switch changed"},
     {"EVE", BoardFrameId::kEmergencyChanged, 1, kEmergencyChangedFields, "event: the emergency switch changed"},
     {"EVF", BoardFrameId::kDriverFault, 2, kDriverFaultFields, "event: a driver fault"},
-    {"STW", BoardFrameId::kWatchdogStatus, 2, kWatchdogStatusFields, "reply to STA 7"},
+    {"STW", BoardFrameId::kWatchdogStatus, 2, kWatchdogStatusFields, "reply to STA 7 (protocol 3)"},
     {"STR", BoardFrameId::kResetStatus, 5, kResetFields, "reply to STA 8 (protocol 4)"},
     {"EVR", BoardFrameId::kResetEvent, 5, kResetFields, "event: why the board reset, after EVB (protocol 4)"},
 };
@@ -455,19 +458,20 @@ constexpr bool is_event(const BoardFrameSpec& frame) { return frame.name[0] == '
 
 enum class Feature : uint8_t {
   kLinkWatchdog,  // WDG, STA 7 (STW), EVD how 6
-  kResetCause,    // EVR after EVB at boot, STA 8 answered with STR
+  kResetCause,    // EVR after EVB at boot, STA 8 (STR)
 };
 
 struct FeatureSpec {
   Feature feature;
-  uint32_t since;    // the first protocol version that has it
-  const char* name;  // stable identifier
-  const char* text;  // what it is, for people
+  uint32_t since;        // the first protocol version that has it
+  const char* name;      // stable identifier
+  const char* text;      // what it is, for people
+  uint32_t status_unit;  // the STA unit it brought; 0 none
 };
 
 inline constexpr FeatureSpec kFeatures[] = {
-    {Feature::kLinkWatchdog, 3, "link_watchdog", "the link watchdog"},
-    {Feature::kResetCause, 4, "reset_cause", "the reset cause and fault record (EVR, STA 8)"},
+    {Feature::kLinkWatchdog, 3, "link_watchdog", "the link watchdog (WDG, STA 7)", kUnitWatchdog},
+    {Feature::kResetCause, 4, "reset_cause", "the reset cause and fault record (EVR, STA 8)", kUnitReset},
 };
 inline constexpr uint32_t kFeatureCount = sizeof(kFeatures) / sizeof(kFeatures[0]);
 
@@ -481,6 +485,25 @@ constexpr bool features_indexed_and_released() {
 }
 static_assert(features_indexed_and_released(),
               "kFeatures[i] describes Feature i, from a protocol version this firmware speaks");
+
+// The feature that brought STA unit `unit`, or nullptr for the units every protocol-2 board has.
+constexpr const FeatureSpec* status_unit_feature(uint32_t unit) {
+  for (const FeatureSpec& f : kFeatures) {
+    if (f.status_unit != 0 && f.status_unit == unit) return &f;
+  }
+  return nullptr;
+}
+// The highest STA unit a board of `protocol` answers (2: 6, 3: 7, 4: 8); above it, NAK out of range.
+constexpr uint32_t status_unit_max(uint32_t protocol) {
+  uint32_t last = kUnitLastBase;
+  for (const FeatureSpec& f : kFeatures) {
+    if (f.since <= protocol && f.status_unit > last) last = f.status_unit;
+  }
+  return last;
+}
+static_assert(status_unit_max(2) == kUnitLastBase && status_unit_max(3) == kUnitWatchdog &&
+                  status_unit_max(kProtocolVersion) == kStatusFields[0].max,
+              "STA's units grow one feature at a time, and this firmware answers them all");
 
 constexpr bool is_power_of_two(uint32_t v) { return v != 0 && (v & (v - 1)) == 0; }
 

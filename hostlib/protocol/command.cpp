@@ -159,6 +159,7 @@ std::string unit_text(uint32_t unit) {
   if (unit >= 1 && unit <= proto::kMotorCount) return "stepper " + std::to_string(unit);
   if (unit == proto::kUnitBoard) return "the board (switches and servos)";
   if (unit == proto::kUnitWatchdog) return "the link watchdog";
+  if (unit == proto::kUnitReset) return "the last reset";
   if (unit >= proto::kUnitFirstStrip && unit < proto::kUnitFirstStrip + proto::kStripCount) {
     return "LED strip " + std::to_string(unit - proto::kUnitFirstStrip + 1);
   }

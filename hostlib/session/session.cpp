@@ -376,10 +376,11 @@ SessionResult<Done> Session::check(const Command& command) const {
     return make_error(SessionError::Kind::kRefused,
                       std::string(command_spec(command).name) + " is a protocol v2 command: the seed firmware does not know it",
                       Reason::kUnknownCommand);
-  } else if (const auto* query = std::get_if<StatusQuery>(&command); query && query->unit == proto::kUnitReset) {
-    if (SessionResult<Done> ok = require(proto::Feature::kResetCause); !ok) return ok;
-  } else if (query && query->unit == proto::kUnitWatchdog) {
-    if (SessionResult<Done> ok = require(proto::Feature::kLinkWatchdog); !ok) return ok;
+  } else if (const auto* query = std::get_if<StatusQuery>(&command)) {
+    // A unit a later protocol brought: an older board would refuse it as out of range.
+    if (const proto::FeatureSpec* brought = proto::status_unit_feature(query->unit)) {
+      if (SessionResult<Done> ok = require(brought->feature); !ok) return ok;
+    }
   }
   return Done{};
 }
@@ -421,14 +422,10 @@ SessionResult<BoardFrame> Session::send_line(std::string_view line) {
 
 SessionResult<Done> Session::refresh() {
   if (firmware_ == Firmware::kSeed) return Done{};
-  const uint32_t last = supports(proto::Feature::kLinkWatchdog) ? proto::kUnitWatchdog
-                                                                 : proto::kUnitFirstStrip + proto::kStripCount - 1;
+  // Every unit the board's protocol has (kFeatures): 1-6, 7 from protocol 3, 8 from protocol 4.
+  const uint32_t last = proto::status_unit_max(version_ ? version_->protocol : 0);
   for (uint32_t unit = 1; unit <= last; ++unit) {
     SessionResult<BoardFrame> reply = execute(StatusQuery{unit});
-    if (!reply) return reply.error();
-  }
-  if (supports(proto::Feature::kResetCause)) {
-    SessionResult<BoardFrame> reply = execute(StatusQuery{proto::kUnitReset});
     if (!reply) return reply.error();
   }
   model_.reported = true;

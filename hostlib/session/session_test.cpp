@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <string>
@@ -87,15 +88,23 @@ class FailingTransport : public hmc::Transport {
 };
 
 // A board whose firmware predates protocol 4, made from the simulated board: its VER and EVB
-// say protocol 2, it sends no EVR, and it refuses STA 8 (out of its 1-6) as such a board does.
-class Protocol2Transport : public hmc::Transport {
+// say `protocol` (2 or 3), it sends no EVR, and it refuses the STA units its protocol lacks
+// (proto::status_unit_max: 2 answers 1-6, 3 answers 1-7) as out of range, as such a board does.
+class OlderBoardTransport : public hmc::Transport {
  public:
-  explicit Protocol2Transport(std::unique_ptr<hmc::Transport> inner) : inner_(std::move(inner)) {}
+  OlderBoardTransport(std::unique_ptr<hmc::Transport> inner, uint32_t protocol)
+      : inner_(std::move(inner)), protocol_(protocol) {}
   hmc::Status write(std::string_view bytes) override {
     writes.emplace_back(bytes);
-    if (bytes.rfind("STX#2#STA#8#", 0) == 0) {
-      pending_ += "STX#4#NAK#9#3#10#22#ETX\n";
-      return hmc::Done{};
+    std::string line(bytes);
+    while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
+    if (auto sent = hmc::decode(line, hmc::proto::ChecksumMode::kSum); sent) {
+      if (const auto* query = std::get_if<hmc::StatusQuery>(&sent->command);
+          query && query->unit > hmc::proto::status_unit_max(protocol_)) {
+        // The unit is token 3, at byte 10 of "STX#2#STA#u#u#ETX".
+        pending_ += hmc::encode_board_frame(hmc::Nak{Reason::kOutOfRange, 3, 10}).value() + "\n";
+        return hmc::Done{};
+      }
     }
     return inner_->write(bytes);
   }
@@ -110,19 +119,24 @@ class Protocol2Transport : public hmc::Transport {
     }
     return std::exchange(pending_, std::string());
   }
-  std::string description() const override { return "protocol 2 test board"; }
+  std::string description() const override { return "protocol " + std::to_string(protocol_) + " test board"; }
+  bool sent_status_query(uint32_t unit) const {
+    const std::string prefix = "STX#2#STA#" + std::to_string(unit) + "#";
+    return std::any_of(writes.begin(), writes.end(), [&](const std::string& w) { return w.rfind(prefix, 0) == 0; });
+  }
   std::vector<std::string> writes;
 
  private:
-  static std::string rewrite(const std::string& line) {
+  std::string rewrite(const std::string& line) const {
     auto frame = hmc::decode_board_frame(line);
     if (!frame) return line + "\n";
     if (std::holds_alternative<hmc::ResetEvent>(*frame)) return "";
-    if (auto* v = std::get_if<hmc::Version>(&*frame)) v->protocol = 2;
-    if (auto* b = std::get_if<hmc::Booted>(&*frame)) b->protocol = 2;
+    if (auto* v = std::get_if<hmc::Version>(&*frame)) v->protocol = protocol_;
+    if (auto* b = std::get_if<hmc::Booted>(&*frame)) b->protocol = protocol_;
     return hmc::encode_board_frame(*frame).value() + "\n";
   }
   std::unique_ptr<hmc::Transport> inner_;
+  uint32_t protocol_;
   std::string partial_, pending_;
 };
 
@@ -133,30 +147,61 @@ TEST_CASE("the reset cause comes with the board's state; a board predating it is
     StateDir dir;
     auto s = open("sim://?fast");
     CHECK(s->supports(hmc::proto::Feature::kResetCause));
+    CHECK(s->supports(hmc::proto::Feature::kLinkWatchdog));
     REQUIRE(s->model().last_reset.has_value());
     CHECK(s->model().last_reset->cause == hmc::proto::ResetCause::kPowerOn);
+    REQUIRE(s->model().watchdog.has_value());  // STA 7 was read too
     auto reply = s->execute(hmc::StatusQuery{hmc::proto::kUnitReset});
     REQUIRE(reply.ok());
     REQUIRE(std::holds_alternative<hmc::ResetStatus>(reply.value()));
     CHECK(hmc::describe(reply.value()) == "last reset: power-on");
+    auto watchdog = s->execute(hmc::StatusQuery{hmc::proto::kUnitWatchdog});
+    REQUIRE(watchdog.ok());
+    CHECK(std::holds_alternative<hmc::WatchdogStatus>(watchdog.value()));
   }
-  StateDir dir;
-  auto raw = new Protocol2Transport(sim("sim://?fast"));
-  auto opened = Session::open(std::unique_ptr<hmc::Transport>(raw), {});
-  REQUIRE(opened.ok());  // no decode error, no NAK: the host never asked what it lacks
-  auto& s = opened.value();
-  CHECK(s->version()->protocol == 2);
-  CHECK_FALSE(s->supports(hmc::proto::Feature::kResetCause));
-  CHECK_FALSE(s->model().last_reset.has_value());
-  for (const std::string& line : raw->writes) CHECK(line.rfind("STX#2#STA#8#", 0) == std::string::npos);
-  const size_t sent = raw->writes.size();
-  auto reply = s->execute(hmc::StatusQuery{hmc::proto::kUnitReset});
-  REQUIRE_FALSE(reply.ok());
-  CHECK(reply.error().kind == SessionError::Kind::kTooOld);
-  CHECK(reply.error().message ==
-        "the board's firmware is too old for this: reflash (the reset cause and fault record (EVR, STA 8) needs "
-        "protocol 4; the board speaks protocol 2)");
-  CHECK(raw->writes.size() == sent);
+  for (const uint32_t protocol : {2u, 3u}) {
+    DYNAMIC_SECTION("protocol " << protocol) {
+      StateDir dir;
+      auto raw = new OlderBoardTransport(sim("sim://?fast"), protocol);
+      auto opened = Session::open(std::unique_ptr<hmc::Transport>(raw), {});
+      REQUIRE(opened.ok());  // no decode error, no NAK: the host never asked what it lacks
+      auto& s = opened.value();
+      CHECK(s->version()->protocol == protocol);
+      CHECK_FALSE(s->supports(hmc::proto::Feature::kResetCause));
+      CHECK(s->supports(hmc::proto::Feature::kLinkWatchdog) == (protocol >= 3));
+      CHECK_FALSE(s->model().last_reset.has_value());
+      CHECK(s->model().watchdog.has_value() == (protocol >= 3));
+      CHECK(raw->sent_status_query(hmc::proto::kUnitLastBase));
+      CHECK(raw->sent_status_query(hmc::proto::kUnitWatchdog) == (protocol >= 3));
+      CHECK_FALSE(raw->sent_status_query(hmc::proto::kUnitReset));
+      const size_t sent = raw->writes.size();
+      auto reply = s->execute(hmc::StatusQuery{hmc::proto::kUnitReset});
+      REQUIRE_FALSE(reply.ok());
+      CHECK(reply.error().kind == SessionError::Kind::kTooOld);
+      CHECK(reply.error().message ==
+            "the board's firmware is too old for this: reflash (the reset cause and fault record (EVR, STA 8) needs "
+            "protocol 4; the board speaks protocol " +
+                std::to_string(protocol) + ")");
+      if (protocol == 2) {
+        auto watchdog = s->execute(hmc::StatusQuery{hmc::proto::kUnitWatchdog});
+        REQUIRE_FALSE(watchdog.ok());
+        CHECK(watchdog.error().kind == SessionError::Kind::kTooOld);
+        CHECK(watchdog.error().message ==
+              "the board's firmware is too old for this: reflash (the link watchdog (WDG, STA 7) needs protocol 3; "
+              "the board speaks protocol 2)");
+      } else {
+        auto watchdog = s->execute(hmc::StatusQuery{hmc::proto::kUnitWatchdog});
+        REQUIRE(watchdog.ok());
+        CHECK(std::holds_alternative<hmc::WatchdogStatus>(watchdog.value()));
+      }
+      // Sent as a raw line, the board's own refusal: out of range, as the board of that protocol says.
+      auto raw_reply = s->send_line("STX#2#STA#8#8#ETX");
+      REQUIRE_FALSE(raw_reply.ok());
+      CHECK(raw_reply.error().kind == SessionError::Kind::kNak);
+      CHECK(raw_reply.error().reason == Reason::kOutOfRange);
+      CHECK(raw->writes.size() == sent + (protocol == 2 ? 1 : 2));
+    }
+  }
 }
 
 TEST_CASE("a v2 board is detected and its state read") {

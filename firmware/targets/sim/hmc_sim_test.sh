@@ -95,9 +95,10 @@ out=$(timeout 20 "$sim" --fast --no-self-test <"$src/examples/spec-frames.txt")
 check "stdio exit code" 0 $?
 check_match "stdio boot event" '^STX#3#EVB#4#100#104#ETX$' "$out"
 check_match "stdio boot event: reset cause power-on" '^STX#6#EVR#1#0#0#0#0#1#ETX$' "$out"
-out_sw=$(timeout 20 "$sim" --fast --no-self-test --reset-cause software <<<'STX#2#STA#8#8#ETX')
+out_sw=$(timeout 20 "$sim" --fast --no-self-test --reset-cause software <<<$'STX#2#STA#7#7#ETX\nSTX#2#STA#8#8#ETX')
 check_match "--reset-cause software: EVR" '^STX#6#EVR#5#0#0#0#0#5#ETX$' "$out_sw"
 check_match "--reset-cause software: STA 8 answers STR" '^STX#6#STR#5#0#0#0#0#5#ETX$' "$out_sw"
+check_match "STA 7 still answers STW (the link watchdog, off)" '^STX#3#STW#0#0#0#ETX$' "$out_sw"
 timeout 5 "$sim" --reset-cause fault </dev/null >/dev/null 2>&1
 check "--reset-cause fault is refused (a simulated board has no fault record)" 2 $?
 out=$(replies <<<"$out")

@@ -152,6 +152,7 @@ struct WatchdogStatus {
   bool fired = false;       // it braked the motors since it was last armed
   bool operator==(const WatchdogStatus& o) const { return timeout_ms == o.timeout_ms && fired == o.fired; }
 };
+
 // Why the board last reset and, after a fault, where (protocol 4, proto::kResetFields).
 struct ResetInfo {
   proto::ResetCause cause = proto::ResetCause::kUnknown;
@@ -165,7 +166,7 @@ struct ResetInfo {
 };
 // STR: the answer to STA 8.
 struct ResetStatus : ResetInfo {};
-// EVR: sent right after EVB at boot.
+// EVR (protocol 4): sent right after EVB at boot.
 struct ResetEvent : ResetInfo {};
 
 // Ordered by proto::BoardFrameId.

@@ -89,8 +89,8 @@ struct BoardModel {
   std::array<std::optional<MotionEnd>, proto::kMotorCount> last_end{};
   // The link watchdog (STA 7), when the board has one (protocol 3).
   std::optional<WatchdogStatus> watchdog;
-  // Why the board last reset (protocol 4: STR when the session opened, EVR when it reboots);
-  // nothing from a board that predates it.
+  // Why the board last reset (protocol 4: STR to STA 8 when the session opened, EVR when it
+  // reboots); nothing from a board that predates it.
   std::optional<ResetInfo> last_reset;
 
   BoardModel();
