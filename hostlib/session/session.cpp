@@ -208,11 +208,15 @@ SessionResult<std::unique_ptr<Session>> Session::open(std::unique_ptr<Transport>
 }
 
 SessionResult<Done> Session::detect() {
-  // Whatever an earlier program left unread is not an answer to this session.
-  if (SessionResult<std::vector<BoardFrame>> drained = pump(Millis{20}); !drained) return drained.error();
+  // Whatever an earlier program left unread is not an answer to this session; nor is the end of
+  // a line the board had begun before the port was opened (its start never reached us).
+  detecting_ = true;
+  if (SessionResult<std::vector<BoardFrame>> drained = pump(Millis{20}); !drained) {
+    detecting_ = false;
+    return drained.error();
+  }
   pending_replies_.clear();
 
-  detecting_ = true;
   const SessionResult<Done> result = detect_firmware();
   detecting_ = false;
   return result;
@@ -310,6 +314,9 @@ SessionResult<std::vector<BoardFrame>> Session::pump(Millis timeout) {
       }
     }
     if (options_.on_line) options_.on_line(line->text, frame);
+    // Before VER is answered no reply is counted yet: a line cut short by the opening of the
+    // port is passed over (if it was the answer, detection times out and says so).
+    if (!frame && detecting_) continue;
     if (!frame) {
       // Counting replies is only possible if every line is read: a garbled one ends the session.
       return make_error(SessionError::Kind::kLink,

@@ -87,6 +87,26 @@ class FailingTransport : public hmc::Transport {
   int reads_ = 0;
 };
 
+// A port opened while the board was sending: the first read brings the end of a line whose
+// start was never received, then the board as it is.
+class MidLineTransport : public hmc::Transport {
+ public:
+  explicit MidLineTransport(std::unique_ptr<hmc::Transport> inner) : inner_(std::move(inner)) {}
+  hmc::Status write(std::string_view bytes) override { return inner_->write(bytes); }
+  hmc::Result<std::string> read(Millis timeout) override {
+    if (!cut_sent_) {
+      cut_sent_ = true;
+      return std::string("#0#0#0#1#ETX\n");
+    }
+    return inner_->read(timeout);
+  }
+  std::string description() const override { return "port opened mid-line"; }
+
+ private:
+  std::unique_ptr<hmc::Transport> inner_;
+  bool cut_sent_ = false;
+};
+
 // A board whose firmware predates protocol 4, made from the simulated board: its VER and EVB
 // say `protocol` (2 or 3), it sends no EVR, and it refuses the STA units its protocol lacks
 // (proto::status_unit_max: 2 answers 1-6, 3 answers 1-7) as out of range, as such a board does.
@@ -202,6 +222,12 @@ TEST_CASE("the reset cause comes with the board's state; a board predating it is
       CHECK(raw->writes.size() == sent + (protocol == 2 ? 1 : 2));
     }
   }
+}
+
+TEST_CASE("the end of a line begun before the port was opened is passed over, not taken for a broken link") {
+  auto session = Session::open(std::make_unique<MidLineTransport>(sim("sim://midline?fast&fresh&nosave")), {});
+  REQUIRE(session);
+  CHECK(session.value()->firmware() == hmc::Firmware::kV2);
 }
 
 TEST_CASE("a v2 board is detected and its state read") {
