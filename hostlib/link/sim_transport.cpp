@@ -39,6 +39,11 @@ constexpr int kJournalVersion = 1;
 constexpr Ticks kFastSlice = sim::kPollTicks;
 // Real time: how long a read sleeps between catching the board up with the wall clock.
 constexpr auto kRealTimeSleep = std::chrono::milliseconds(1);
+// Fast: how far short of the link watchdog's deadline virtual time waits for the host (as
+// hmc-sim --fast does), and how long a read waits there, in wall time, before giving the host
+// its turn to write.
+constexpr Ticks kWatchdogMargin = 5000 * hal::kTicksPerMicrosecond;
+constexpr auto kWatchdogHoldSleep = std::chrono::milliseconds(1);
 
 Ticks duration_ticks(std::chrono::nanoseconds duration) {
   const auto ns = static_cast<uint64_t>(std::max<int64_t>(duration.count(), 0));
@@ -240,7 +245,12 @@ class SimTransport final : public Transport {
     if (options_.fast) {
       const Ticks end = board_->now() + duration_ticks(timeout);
       while (out.empty() && board_->now() < end) {
-        board_->run_until(std::min(board_->now() + kFastSlice, end));
+        const Ticks until = fast_limit(std::min(board_->now() + kFastSlice, end));
+        if (until <= board_->now()) {  // short of the watchdog's deadline: the host's turn
+          std::this_thread::sleep_for(kWatchdogHoldSleep);
+          break;
+        }
+        board_->run_until(until);
         out = board_->take_output();
       }
       // A host reads a line once it is whole: wait for the rest of the one begun.
@@ -286,7 +296,31 @@ class SimTransport final : public Transport {
   }
 
   SimPortOptions options_;
+  // Fast virtual time outruns any host: its keep-alives, sent every so often in wall time, would
+  // be seconds apart in virtual time and the link watchdog would brake the motors of a live
+  // host. So virtual time stops just short of the watchdog's deadline and waits there, in wall
+  // time, as long as the watchdog's timeout; only a host silent that long lets it fire.
+  Ticks fast_limit(Ticks target) {
+    const fw::Controller& controller = board_->controller();
+    const Ticks due = controller.watchdog_due() - kWatchdogMargin;
+    if (controller.watchdog_ms() == 0 || target < due || board_->receiving()) {
+      holding_ = false;
+      return target;
+    }
+    const Clock::time_point wall = Clock::now();
+    if (!holding_ || due != held_due_) {
+      holding_ = true;
+      held_due_ = due;
+      held_until_ = wall + std::chrono::milliseconds(controller.watchdog_ms());
+    }
+    if (wall >= held_until_) return target;  // the host stayed silent: let the watchdog fire
+    return due > board_->now() ? due - 1 : board_->now();
+  }
+
   std::unique_ptr<sim::SimBoard> board_;
+  bool holding_ = false;  // fast: virtual time waits short of the watchdog's deadline
+  Ticks held_due_ = 0;
+  Clock::time_point held_until_;
   int journal_fd_;
   std::string journal_path_;
   std::string note_;

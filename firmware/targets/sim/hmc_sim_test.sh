@@ -93,7 +93,7 @@ stopped() {
 vector() { "$session" "$src/conformance/vectors" "$1" "$2"; }
 out=$(timeout 20 "$sim" --fast --no-self-test <"$src/examples/spec-frames.txt")
 check "stdio exit code" 0 $?
-check_match "stdio boot event" '^STX#3#EVB#3#100#103#ETX$' "$out"
+check_match "stdio boot event" '^STX#3#EVB#6#100#106#ETX$' "$out"
 out=$(replies <<<"$out")
 check "stdio spec-frames answers (vector spec-session)" "$(vector spec-session replies)" "$out"
 out=$(timeout 20 "$sim" --fast --no-self-test --legacy <"$src/examples/spec-frames.txt" | replies)

@@ -18,7 +18,7 @@ namespace {
 
 constexpr Ticks kMs = 48000;
 constexpr Ticks kByte = 4167;  // 10 bits at 115200 baud, rounded up to the tick
-const std::string kBootEvent = "STX#3#EVB#3#100#103#ETX\n";
+const std::string kBootEvent = "STX#3#EVB#6#100#106#ETX\n";
 
 SimConfig quiet_config() {
   SimConfig config;
@@ -153,7 +153,7 @@ TEST_CASE("take_written gives what the firmware wrote at once, on the wire or no
   SimBoard board(config);
   board.boot();
   board.run_until(5 * kByte);  // the boot event: 5 of its 24 bytes through
-  CHECK(board.take_written() == "STX#3#EVB#3#100#103#ETX\n");
+  CHECK(board.take_written() == "STX#3#EVB#6#100#106#ETX\n");
   CHECK_FALSE(board.transmitting());
   CHECK(board.take_output().empty());
   // The wire stays busy for them: a reply written now still leaves after them.
@@ -174,7 +174,7 @@ TEST_CASE("an axis moves by 256/microstep per step and closes its switch at the 
   // The reply, then the switch event and the end of the motion (halted by a limit switch, at
   // -1600: the firmware counts from 0 at power-up).
   CHECK(board.take_output() ==
-        "STX#3#EVB#3#100#103#ETX\nSTX#1#ACK#0#ETX\nSTX#4#EVL#1#0#1#2#ETX\nSTX#5#EVD#1#3#1#1600#69#ETX\n");
+        "STX#3#EVB#6#100#106#ETX\nSTX#1#ACK#0#ETX\nSTX#4#EVL#1#0#1#2#ETX\nSTX#5#EVD#1#3#1#1600#69#ETX\n");
   CHECK(board.axis_position(1) == 0);
   CHECK(board.steps(1) == 100);
   CHECK(board.limit_pressed(1, 0));
