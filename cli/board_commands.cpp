@@ -400,6 +400,11 @@ void add_home(CLI::App& app, const GlobalOptions& g, int& exit_code) {
         }
         const int done = wait_and_report(g, s, {m}, Motion::kHome);
         if (done != kExitOk && done != kExitIncomplete) return done;
+        if (const Axis* axis = profile != nullptr ? profile->axis_of_motor(m) : nullptr) {
+          if (Status limits = send_soft_limits(s, *axis); !limits) {
+            return report_error(g, SessionError{SessionError::Kind::kNak, limits.error().message, proto::Reason::kOk});
+          }
+        }
         if (done != kExitOk) code = done;
       }
       return code;
