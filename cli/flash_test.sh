@@ -152,7 +152,7 @@ import struct
 def image(info):
     text = info.encode() + b'\0'
     return struct.pack('<II', 0x20007FF8, 0x2101) + bytes(0xB0 - 8) + text + bytes(512 - 0xB0 - len(text))
-seed = 'hmc-board:seed;protocol:4;firmware:100;guessed:PA05,PA06;'
+seed = 'hmc-board:seed;protocol:6;firmware:100;guessed:PA05,PA06;'
 open('board.bin', 'wb').write(image(seed))
 open('board-proto2.bin', 'wb').write(image('hmc-board:bench;protocol:2;firmware:100;guessed:PA05;'))
 # A UF2 file whose info text straddles its two blocks' payloads.
