@@ -176,6 +176,19 @@ HomingSetup homing_setup(const Axis& axis, StepperMove move) {
   return setup;
 }
 
+Status send_soft_limits(Session& s, const Axis& axis) {
+  if (!axis.limit_min || s.firmware() != Firmware::kV2 || !s.model().motor(axis.motor).homed) return Done{};
+  int64_t low = axis.to_board_position(*axis.limit_min).steps;
+  int64_t high = axis.to_board_position(*axis.limit_max).steps;
+  if (low > high) std::swap(low, high);  // an inverted axis
+  const auto magnitude = [](int64_t v) { return static_cast<uint32_t>(std::llabs(v)); };
+  const SoftLimits limits{axis.motor, low < 0 ? 1u : 0u, magnitude(low), high < 0 ? 1u : 0u, magnitude(high)};
+  if (SessionResult<BoardFrame> sent = s.execute(limits); !sent) {
+    return Error{"axis '" + axis.name + "': its soft limits were not taken: " + sent.error().message};
+  }
+  return Done{};
+}
+
 std::optional<std::string> beyond_soft_limits(const Axis& axis, const MotorStatus& motor, double target) {
   if (!axis.limit_min || !motor.homed) return std::nullopt;
   if (target >= *axis.limit_min - 1e-9 && target <= *axis.limit_max + 1e-9) return std::nullopt;

@@ -60,6 +60,11 @@ struct HomingSetup {
 };
 HomingSetup homing_setup(const Axis& axis, StepperMove move);
 
+// Sends the axis's soft limits (LIM, in the board's positions) when its position means
+// something — the motor homed or zeroed since power-up — as grbl enforces limits only then; does
+// nothing for an axis without limits, an unreferenced motor, or the seed firmware.
+Status send_soft_limits(Session& session, const Axis& axis);
+
 // "slide at 250 mm (20000 steps of 1/16)" and its JSON, for an axis of the profile.
 std::string axis_position_words(const Axis& axis, const MotorStatus& motor);
 nlohmann::json axis_to_json(const Axis& axis, const MotorStatus& motor);

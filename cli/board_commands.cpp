@@ -408,6 +408,11 @@ void add_home(CLI::App& app, const GlobalOptions& g, int& exit_code) {
         // The first motor that fails ends it: the next would home under the same fault.
         const int done = wait_and_report(g, s, {m}, Motion::kHome);
         if (done != kExitOk) return done;
+        if (const Axis* axis = profile != nullptr ? profile->axis_of_motor(m) : nullptr) {
+          if (Status limits = send_soft_limits(s, *axis); !limits) {
+            return report_error(g, SessionError{SessionError::Kind::kNak, limits.error().message, proto::Reason::kOk});
+          }
+        }
       }
       return static_cast<int>(kExitOk);
     });

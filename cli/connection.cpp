@@ -5,6 +5,7 @@
 
 #include <iostream>
 
+#include "axis_units.h"
 #include "exit_codes.h"
 #include "profile_choice.h"
 #include "hmc/command_json.h"
@@ -153,6 +154,15 @@ std::unique_ptr<Session> connect(const GlobalOptions& given, int& exit_code, Lin
     return nullptr;
   }
   if (!o.json) std::cerr << "board: " << session.value()->description() << '\n';
+  // The profile's soft limits, for the board to enforce too (on axes whose position means something).
+  if (const Result<const Profile*, int> profile = use_profile(o); profile && *profile != nullptr) {
+    for (const Axis& axis : (*profile)->axes) {
+      if (Status sent = send_soft_limits(*session.value(), axis); !sent) {
+        exit_code = report_error(o, SessionError{SessionError::Kind::kNak, sent.error().message, proto::Reason::kOk});
+        return nullptr;
+      }
+    }
+  }
   return std::move(session.value());
 }
 

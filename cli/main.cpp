@@ -14,6 +14,7 @@
 #include "motion_commands.h"
 #include "ports_command.h"
 #include "sim_command.h"
+#include "zero_command.h"
 
 #ifndef HMC_VERSION
 #error "HMC_VERSION must be defined by the build"
@@ -50,6 +51,7 @@ int main(int argc, char** argv) {
   hmc::cli::add_flash_command(app, exit_code);
   hmc::cli::add_completion_command(app, exit_code);
   hmc::cli::add_config_command(app, global, exit_code);
+  hmc::cli::add_zero_command(app, global, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -120,6 +120,16 @@ expect pan-mm 2 "axis 'pan' is rotary: it takes deg, rev or steps, not mm" -- "$
 expect motor-3-deg 0 '^motor 3 at 90 deg \(800 steps of 1/16\)' -- "$hmc" "${pan_tilt[@]}" move 3 --to 90deg --wait
 expect accel-number 0 'motor 1: done' -- "$hmc" "${pan_tilt[@]}" move 1 3200 --accel 8000 --wait
 
+# Zero: POS (protocol 6) on motor 3, which has no switches; then the profile's limits are on the board.
+# (the default profile is the gantry's by now: motor 3 is its axis z)
+expect zero-3 0 '^z at 0 mm \(0 steps of 1/16\), 0 mm/s, homed$' -- "$hmc" --port 'sim://s?fast' zero 3
+expect zero-3-status 0 '^3 +idle +0 +0 +1/16 +0 +yes' -- "$hmc" --port 'sim://s?fast' status
+expect zero-value 0 '^slide at 100 mm \(8000 steps of 1/16\)' -- "$hmc" "${slider[@]}" --port 'sim://s?fast' zero slide 100mm
+expect zero-wrong-unit 2 "axis 'slide' is linear: it takes mm, rev or steps, not deg" -- "$hmc" "${slider[@]}" --port 'sim://s?fast' zero slide 5deg
+expect zero-seed 1 "the board's firmware is too old for this: reflash" -- "$hmc" --port 'sim://old?fast&seed' --firmware seed zero 3
+# The board enforces the limits it was sent: 0-310 mm is now -100 mm to 210 mm of the board's old count.
+expect board-soft-limit 1 'soft' -- "$hmc" --port 'sim://s?fast' move 1 24000 --microstep 16
+
 # The profile's port, baud and firmware when the command line gives none.
 printf 'port = "sim://fromprofile?fast"\nbaud = 57600\n[axis.a]\nmotor = 1\nrotary = true\n' >"$work/port.toml"
 expect port-from-profile 0 'board: simulated board sim://fromprofile' -- "$hmc" --profile "$work/port.toml" status

@@ -40,9 +40,9 @@ check_match() {
 }
 
 ver='STX#1#VER#0#ETX'
-boot_out="STX#3#EVB#4#100#104#ETX
+boot_out="STX#3#EVB#6#100#106#ETX
 STX#6#EVR#1#0#0#0#0#1#ETX
-STX#9#VER#4#100#0#128#50000#322#3#0#125#ETX"
+STX#9#VER#6#100#0#128#50000#322#3#0#127#ETX"
 for image in hmc-firmware hmc-firmware-nobl; do
   for clock in "" --no-crystal; do
     name="$image${clock:+ $clock}"

@@ -202,6 +202,8 @@ Controller::Refusal Controller::execute(const Command& command) {
       watchdog_at_ = board_.timer.now() + ms_to_ticks(watchdog_ms_);
       if (watchdog_ms_ != 0) watchdog_fired_ = false;
       return {};
+    case proto::CommandId::kSetPosition:
+      return set_position(command.position);
   }
   return {Reason::kUnknownCommand, proto::kTokenName};
 }
@@ -248,6 +250,18 @@ Controller::Refusal Controller::limits(const LimitsCommand& command) {
   mo.soft_low = command.low_sign != 0 ? -static_cast<int64_t>(command.low) : command.low;
   mo.soft_high = command.high_sign != 0 ? -static_cast<int64_t>(command.high) : command.high;
   mo.soft_limits = mo.soft_low < mo.soft_high;
+  return {};
+}
+
+// POS: the resting motor is where the host says (its zero, or a given value), and its position
+// means something from now on, as after homing: STA reports it homed. A moving motor keeps
+// counting: refused (motors_running), as the scheduler sets positions only at rest.
+Controller::Refusal Controller::set_position(const PositionCommand& command) {
+  Motor& mo = motors_[index(command.motor)];
+  if (mo.state != MotorState::kIdle) return {Reason::kMotorsRunning, proto::kTokenFirstValue};
+  const int32_t position = command.sign != 0 ? -static_cast<int32_t>(command.position) : static_cast<int32_t>(command.position);
+  if (!scheduler_.set_position(command.motor, position)) return {Reason::kMotorsRunning, proto::kTokenFirstValue};
+  mo.homed = true;
   return {};
 }
 

@@ -184,6 +184,7 @@ class Controller {
   Refusal led(const LedCommand& command);
   Refusal set(const SettingCommand& command);
   Refusal limits(const LimitsCommand& command);
+  Refusal set_position(const PositionCommand& command);
   void answer_version();
   void answer_status(uint8_t unit);
   void check_watchdog(hal::Ticks now);

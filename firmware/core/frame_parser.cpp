@@ -164,6 +164,9 @@ void fill_command(proto::CommandId id, const uint32_t* values, Command& command)
     case proto::CommandId::kWatchdog:
       command.watchdog = {values[0]};
       break;
+    case proto::CommandId::kSetPosition:
+      command.position = {static_cast<uint8_t>(values[0]), static_cast<uint8_t>(values[1]), values[2]};
+      break;
   }
 }
 
@@ -284,6 +287,9 @@ uint32_t command_values(const Command& command, uint32_t (&values)[proto::kMaxVa
       break;
     case proto::CommandId::kWatchdog:
       values[0] = command.watchdog.timeout_ms;
+      break;
+    case proto::CommandId::kSetPosition:
+      values[0] = command.position.motor, values[1] = command.position.sign, values[2] = command.position.position;
       break;
   }
   return proto::command_spec(command.id).value_count;

@@ -62,6 +62,12 @@ struct WatchdogCommand {  // protocol 3
   uint32_t timeout_ms;   // 0 off
 };
 
+struct PositionCommand {
+  uint8_t motor;
+  uint8_t sign;       // 0 plus, 1 minus
+  uint32_t position;  // 1/256 step
+};
+
 struct Command {
   proto::CommandId id;
   union {
@@ -73,6 +79,7 @@ struct Command {
     LimitsCommand limits;
     ChecksumModeCommand checksum_mode;
     WatchdogCommand watchdog;
+    PositionCommand position;
   };
 };
 

@@ -135,6 +135,8 @@ enum class CommandId : uint8_t {
   kChecksumMode,  // CRC: the seed's sum or CRC-16
   // Protocol 3.
   kWatchdog,      // WDG: the link watchdog
+  // Protocol 6.
+  kSetPosition,   // POS: set a resting motor's position (protocol 6)
 };
 
 enum FieldFlag : uint8_t {
@@ -256,6 +258,12 @@ inline constexpr FieldSpec kWatchdogFields[] = {
     {"timeout_ms", 0, kWatchdogMaxMs, 0, 0, 0, "brake every motor after this long without a line; 0 off"},
 };
 
+inline constexpr FieldSpec kPositionFields[] = {
+    {"motor", 1, kMotorCount, 0, 0, 0, "stepper 1-3"},
+    {"sign", 0, 1, 0, 0, 0, "0 plus, 1 minus"},
+    {"position", 0, kIntMax, 0, 0, 0, "the motor's position from now on, 1/256 step"},
+};
+
 inline constexpr CommandSpec kCommands[] = {
     {"STM", CommandId::kStepper, 5, kStepperFields, 1, "stepper: move, run, stop or home"},
     {"SVM", CommandId::kServo, 2, kServoFields, -1, "servo: go to an angle"},
@@ -267,6 +275,7 @@ inline constexpr CommandSpec kCommands[] = {
     {"LIM", CommandId::kLimits, 5, kLimitFields, -1, "soft travel limits of a motor"},
     {"CRC", CommandId::kChecksumMode, 1, kChecksumModeFields, -1, "checksum mode: sum or CRC-16"},
     {"WDG", CommandId::kWatchdog, 1, kWatchdogFields, -1, "link watchdog: arm with a timeout, 0 disarms"},
+    {"POS", CommandId::kSetPosition, 3, kPositionFields, -1, "set a resting motor's position (zero it)"},
 };
 inline constexpr uint32_t kCommandCount = sizeof(kCommands) / sizeof(kCommands[0]);
 
@@ -285,7 +294,7 @@ static_assert(commands_indexed_by_id(), "kCommands[i] must describe CommandId i"
 // Board -> host frames (protocol v2, docs/protocol.md "Replies" and "Protocol v2"). One reply
 // per non-blank line received; events (names starting with 'E') come unprompted between them.
 
-inline constexpr uint32_t kProtocolVersion = 4;
+inline constexpr uint32_t kProtocolVersion = 6;
 inline constexpr uint32_t kFirmwareVersion = 100;  // major·10000 + minor·100 + patch: 0.1.0
 
 // Why the board last reset (EVR, STR). The SAMD21 reads it from PM RCAUSE; kFault is a system
@@ -459,6 +468,7 @@ constexpr bool is_event(const BoardFrameSpec& frame) { return frame.name[0] == '
 enum class Feature : uint8_t {
   kLinkWatchdog,  // WDG, STA 7 (STW), EVD how 6
   kResetCause,    // EVR after EVB at boot, STA 8 (STR)
+  kSetPosition,   // POS
 };
 
 struct FeatureSpec {
@@ -472,6 +482,8 @@ struct FeatureSpec {
 inline constexpr FeatureSpec kFeatures[] = {
     {Feature::kLinkWatchdog, 3, "link_watchdog", "the link watchdog (WDG, STA 7)", kUnitWatchdog},
     {Feature::kResetCause, 4, "reset_cause", "the reset cause and fault record (EVR, STA 8)", kUnitReset},
+    // 5 is reserved for VER's step budgets (not yet in this firmware): no feature has it.
+    {Feature::kSetPosition, 6, "set_position", "setting a motor's position (POS, hmc zero)", 0},
 };
 inline constexpr uint32_t kFeatureCount = sizeof(kFeatures) / sizeof(kFeatures[0]);
 

@@ -290,7 +290,7 @@ TEST_CASE("CRC-16 mode: the checksum field is exactly 5 digits, zero-padded") {
 TEST_CASE("unknown names list the commands and point at the other direction") {
   const auto d = refusal("STX#1#ACK#0#ETX");
   CHECK(d.reason == Reason::kUnknownCommand);
-  CHECK(d.message.find("STM, SVM, LED, VER, STA, SET, GET, LIM, CRC and WDG") != std::string::npos);
+  CHECK(d.message.find("STM, SVM, LED, VER, STA, SET, GET, LIM, CRC, WDG and POS") != std::string::npos);
   CHECK(d.message.find("ACK is one of the board frames") != std::string::npos);
 }
 

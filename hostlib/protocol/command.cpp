@@ -56,6 +56,10 @@ template <>
 struct Layout<WatchdogCommand> {
   static constexpr std::array kFields{&WatchdogCommand::timeout_ms};
 };
+template <>
+struct Layout<SetPosition> {
+  static constexpr std::array kFields{&SetPosition::motor, &SetPosition::sign, &SetPosition::position};
+};
 
 // Alternative I of Command is CommandId I and has that command's number of values.
 template <std::size_t... I>
@@ -206,6 +210,9 @@ struct Describer {
     return w.timeout_ms == 0 ? "link watchdog off"
                              : "link watchdog on: brake every motor after " + std::to_string(w.timeout_ms) +
                                    " ms without a line";
+  }
+  std::string operator()(const SetPosition& p) const {
+    return "stepper " + std::to_string(p.motor) + ": its position is " + position_text(p.value()) + " (1/256 step) from now on";
   }
 };
 

@@ -86,6 +86,9 @@ std::string explain_refusal(Reason reason, const Command* command, const BoardMo
       }
       return "a limit switch in the direction of the move is pressed";
     case Reason::kMotorsRunning: {
+      if (const auto* set = command != nullptr ? std::get_if<SetPosition>(command) : nullptr) {
+        return motor_name(set->motor) + " moves: its position is set at rest; wait for it, or stop it with `hmc stop`";
+      }
       std::string moving;
       for (const MotorStatus& m : model.motors) {
         if (m.state != MotorState::kIdle) moving += (moving.empty() ? "" : ", ") + motor_name(m.motor);
@@ -374,6 +377,9 @@ SessionResult<Done> Session::check(const Command& command) const {
       if (know_switches && model_.board.emergency) return refuse(Reason::kEmergencyStop);
       if (model_.any_moving()) return refuse(Reason::kMotorsRunning);
     }
+  } else if (const auto* set = std::get_if<SetPosition>(&command)) {
+    if (SessionResult<Done> ok = require(proto::Feature::kSetPosition); !ok) return ok;
+    if (model_.motor(set->motor).state != MotorState::kIdle) return refuse(Reason::kMotorsRunning);
   } else if (std::holds_alternative<ServoMove>(command)) {
     if (know_switches && model_.board.emergency) return refuse(Reason::kEmergencyStop);
     if (legacy_rules() && model_.any_moving()) return refuse(Reason::kBusy);
@@ -683,6 +689,10 @@ void Session::apply_sent(const Command& command) {
     (servo->servo == 1 ? model_.board.servo1_us : model_.board.servo2_us) = proto::servo_pulse_us(servo->angle);
   } else if (const auto* led = std::get_if<LedColor>(&command)) {
     model_.strips[led->strip - 1] = StripStatus{led->strip, led->r, led->g, led->b, led->w};
+  } else if (const auto* set = std::get_if<SetPosition>(&command)) {
+    MotorStatus& m = model_.motor(set->motor);
+    m.position = m.target = set->value();
+    m.homed = true;
   }
   const auto* move = std::get_if<StepperMove>(&command);
   if (move == nullptr) return;

@@ -102,8 +102,18 @@ struct WatchdogCommand {
   bool operator==(const WatchdogCommand& o) const { return timeout_ms == o.timeout_ms; }
 };
 
+// POS (protocol 6): a resting motor's position from now on, 1/256 step as a sign and a magnitude
+// (zero: all 0). The board reports the motor homed afterwards: its position means something.
+struct SetPosition {
+  uint32_t motor = 1;
+  uint32_t sign = 0, position = 0;
+  bool operator==(const SetPosition& o) const { return motor == o.motor && sign == o.sign && position == o.position; }
+  int64_t value() const { return sign != 0 ? -int64_t{position} : int64_t{position}; }
+};
+
 using Command = std::variant<StepperMove, ServoMove, LedColor, VersionQuery, StatusQuery, SetSetting,
-                             GetSetting, SoftLimits, ChecksumModeCommand, WatchdogCommand>;
+                             GetSetting, SoftLimits, ChecksumModeCommand, WatchdogCommand,
+                             SetPosition>;
 
 // A command's values in wire order; only the first `count` are meaningful.
 struct CommandValues {
