@@ -100,7 +100,7 @@ bool interrupt_requested() { return g_interrupted != 0; }
 
 SessionResult<Done> watch_link(Session& s, const GlobalOptions& o) {
   // sim://'s board runs only inside hmc: when hmc dies its time stops too, so nothing runs on
-  // unwatched (and its fast virtual time would outrun the keep-alive).
+  // unwatched.
   if (o.watchdog_ms == 0 || s.simulated()) return Done{};
   if (SessionResult<Done> able = s.require(proto::Feature::kLinkWatchdog); !able) {
     if (!o.json) {
