@@ -146,8 +146,10 @@ if dev=$(announced pty 's/^hmc-sim: pty \(\/dev\/.*\)$/\1/p'); then
   for round in 1 2; do
     exec 3<>"$dev"
     printf '%s\n' "$(frame LED 2 0 0 "$round" 0)" >&3
-    line=
-    while IFS= read -r -t 10 line <&3 && [[ $line =~ ^STX#[0-9]+#E ]]; do :; done  # skip events
+    # The first whole line that is not an event: an opener may come in while the board is in
+    # the middle of a line, as on a real port. Not bash's `read`: on a raw terminal it takes all
+    # that has arrived and keeps only its first line.
+    line=$(timeout 10 grep -m1 -E '^STX#[0-9]+#[^E]' <&3)
     exec 3>&-
     check "pty round $round" "$ack" "$line"
   done

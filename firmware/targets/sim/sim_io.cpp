@@ -276,7 +276,11 @@ class TcpLink final : public Link {
 
 // While the other side is closed the master reports POLLHUP at every wait, so it leaves the
 // wait and is checked again every kRecheckMs instead; what the board sends meanwhile is
-// dropped, so a new opener does not read answers meant for the last one.
+// dropped, and what it sent before is flushed as soon as the hangup is seen, so a new opener
+// reads neither answers meant for the last one nor the remains of lines it half read (a reader
+// may take a byte at a time: flushing once it has opened would cut a line). The link starts
+// hung up: until someone opens the other side there is nobody to send to (a board that booted
+// before its port was opened is heard from its next line on).
 class PtyLink final : public Link {
  public:
   static constexpr int kRecheckMs = 20;
@@ -331,6 +335,13 @@ class PtyLink final : public Link {
     return ::poll(&p, 1, 0) > 0 && (p.revents & POLLHUP) != 0;
   }
 
+  // The board's output still queued on the other side's input, unread by the one who closed it.
+  // Flushing needs a descriptor of that side; its close leaves the hangup as it was.
+  void flush_unread_output() {
+    Fd other(::open(path_.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC));
+    if (other.get() >= 0) tcflush(other.get(), TCIFLUSH);
+  }
+
   // An opener that does not read gets nothing more once kMaxPending bytes wait.
   void flush() {
     if (!write_pending(master_.get(), pending_, Kind::kTerminal)) pending_.clear();
@@ -339,13 +350,14 @@ class PtyLink final : public Link {
   void hang_up() {
     hung_up_ = true;
     pending_.clear();
+    flush_unread_output();
     note(notes_, path_ + " closed by the other side; waiting for it to be opened again");
   }
 
   Fd master_;
   std::string path_;
   Notes notes_;
-  bool hung_up_ = false;
+  bool hung_up_ = true;
   std::string pending_;
   size_t slot_ = 0;
 };
@@ -386,6 +398,11 @@ Result<std::unique_ptr<Link>> open_pty_link(Notes notes) {
   cfmakeraw(&modes);
   if (tcsetattr(master.get(), TCSANOW, &modes) != 0) return LinkResult::fail(os_error("tcsetattr"));
   if (!set_nonblocking(master.get())) return LinkResult::fail(os_error("fcntl"));
+  // Opened and closed once, the other side reports a hangup until someone opens it; never
+  // opened, it reports nothing and the board's first lines would wait there for anyone.
+  if (Fd(::open(path, O_RDWR | O_NOCTTY | O_CLOEXEC)).get() < 0) {
+    return LinkResult::fail(os_error(std::string("cannot open ") + path));
+  }
   return LinkResult::ok(std::make_unique<PtyLink>(std::move(master), path, notes));
 }
 
