@@ -10,9 +10,6 @@ namespace {
 
 using proto::Reason;
 
-// No reply to VER within this long means a board that answers nothing: the seed firmware.
-// It covers the line's wire time at 9600 baud and a network bridge's delay.
-constexpr Millis kDetectTimeout{250};
 // Longest single read while waiting, so interrupts and deadlines are seen promptly.
 constexpr Millis kSlice{50};
 // While a motion runs and the board says nothing for this long, ask it (an event may be lost).
@@ -201,7 +198,7 @@ SessionResult<std::unique_ptr<Session>> Session::open(std::unique_ptr<Transport>
     // silent too. Only the user can say the board runs the original firmware.
     return make_error(SessionError::Kind::kNoReply,
                       "no reply to VER from " + session->transport_->description() + " within " +
-                          std::to_string(kDetectTimeout.count()) +
+                          std::to_string(session->options_.reply_timeout.count()) +
                           " ms: this is not a board, or it is not powered, or not at this baud rate (--baud); or "
                           "it runs the original (seed) firmware, which answers nothing: then say so with "
                           "--firmware seed");
@@ -231,7 +228,8 @@ SessionResult<Done> Session::detect_firmware() {
   for (int attempt = 0; attempt < 2; ++attempt) {
     const Result<std::string, Diagnostic> frame = encode(VersionQuery{}, mode_);
     if (SessionResult<Done> sent = write_line(frame.value(), std::nullopt); !sent) return sent.error();
-    const Clock::time_point deadline = Clock::now() + kDetectTimeout;
+    // VER waits as long as any reply: silence is an error now, never a guess that saves time.
+    const Clock::time_point deadline = Clock::now() + options_.reply_timeout;
     while (pending_replies_.empty() && Clock::now() < deadline) {
       const auto left = std::chrono::duration_cast<Millis>(deadline - Clock::now());
       if (SessionResult<std::vector<BoardFrame>> got = pump(std::min(left + Millis{1}, kSlice)); !got) {
