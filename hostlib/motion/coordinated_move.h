@@ -22,6 +22,7 @@ struct Item {
   const MotorConfig* config = nullptr;
   Location where;
   int64_t delta = 0;
+  double exact_end = 0;  // where it ends before rounding to a whole step
   MotorPlan natural, plan;
   bool planned = false;
 };

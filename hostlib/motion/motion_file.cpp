@@ -4,16 +4,20 @@
 //
 // Checking goes on after a mistake: a broken value yields no step, and what depends on it
 // (unit conversions of a motor whose gearing is broken, names when "motors" is missing) is not
-// checked, so one mistake is reported once.
+// checked, so one mistake is reported once. A file with mistakes is also planned as far as its
+// sound steps allow (plan_check.h), so that planning's mistakes come in the same run.
 #include "hmc/motion_file.h"
 
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
+#include <filesystem>
+#include <optional>
 #include <system_error>
 #include <utility>
 
 #include "motion_file_check.h"
+#include "plan_check.h"
 
 namespace hmc::motion {
 
@@ -24,12 +28,13 @@ using reading::Kind;
 using reading::kMaxUnrolledSteps;
 using reading::Value;
 
-constexpr std::string_view kTopKeys[] = {"hmc_motion", "name", "motors", "steps"};
+constexpr std::string_view kTopKeys[] = {"hmc_motion", "name", "profile", "motors", "steps"};
 
 // One file: the document, its top level, and the parts that read the rest.
 class Checker {
  public:
-  Checker(std::string_view text, const std::string& file) : text_(text), file_(file), r_(text, file) {}
+  Checker(std::string_view text, const std::string& file, const ReadOptions& options)
+      : text_(text), file_(file), options_(options), r_(text, file) {}
 
   Result<MotionFile, std::vector<FileError>> run() {
     std::vector<FileError>& errors_ = r_.errors();
@@ -43,11 +48,17 @@ class Checker {
     file_data_.path = file_;
     top(doc->root);
     if (!errors_.empty()) {
+      // One pass: what planning finds in the steps that are sound, beside what reading found.
+      for (FileError& e : planning::position_mistakes(file_data_, steps_.broken())) errors_.push_back(std::move(e));
       std::stable_sort(errors_.begin(), errors_.end(), [](const FileError& a, const FileError& b) {
         return a.where.line != b.where.line ? a.where.line < b.where.line : a.where.column < b.where.column;
       });
       return std::move(errors_);
     }
+    file_data_.notes = std::move(r_.notes());
+    std::stable_sort(file_data_.notes.begin(), file_data_.notes.end(), [](const FileError& a, const FileError& b) {
+      return a.where.line != b.where.line ? a.where.line < b.where.line : a.where.column < b.where.column;
+    });
     return std::move(file_data_);
   }
 
@@ -75,9 +86,33 @@ class Checker {
       if (auto s = r_.string(*v, json::path_with_key(path, "name"))) file_data_.name = *s;
     }
 
+    // The motors: the file's own, or the axes of the profile it names (or that it is read with).
+    const Value* named = r_.get(root, "profile");
+    std::optional<hmc::Profile> profile;
+    if (named != nullptr) {
+      const std::string p = json::path_with_key(path, "profile");
+      if (auto name = r_.string(*named, p)) {
+        auto loaded = options_.load_profile ? options_.load_profile(*name, file_) : load_named_profile(*name, file_);
+        if (loaded) {
+          profile = std::move(*loaded);
+          file_data_.profile = profile->path;
+        } else {
+          r_.bad(*named, p, "a machine profile without mistakes (docs/config.md)", loaded.error());
+        }
+      }
+    }
     if (const Value* v = r_.get(root, "motors")) {
-      motors_.read(*v, json::path_with_key(path, "motors"), file_data_.motors);
-    } else {
+      if (named != nullptr) {
+        r_.bad(*v, json::path_with_key(path, "motors"), "either \"profile\" or \"motors\"",
+               "a file that names a profile takes its motors from the profile's axes: it declares no \"motors\"");
+      } else {
+        motors_.read(*v, json::path_with_key(path, "motors"), file_data_.motors);
+      }
+    } else if (profile) {
+      motors_.from_profile(*profile, r_.location(named->at, json::path_with_key(path, "profile")), file_data_.motors);
+    } else if (named == nullptr && options_.profile != nullptr) {
+      motors_.from_profile(*options_.profile, r_.location(root.at, path), file_data_.motors);
+    } else if (named == nullptr) {
       r_.missing(root, path, "motors", "an object of 1 to 3 motors");
     }
 
@@ -99,8 +134,25 @@ class Checker {
     }
   }
 
+  // The profile a file names, relative to the motion file's folder.
+  static Result<hmc::Profile, std::string> load_named_profile(const std::string& name, const std::string& motion_file) {
+    std::filesystem::path p(name);
+    if (p.is_relative()) p = std::filesystem::path(motion_file).parent_path() / p;
+    auto loaded = load_profile(p.string());
+    if (loaded) return std::move(*loaded);
+    const ProfileError& e = loaded.error();
+    if (e.unreadable || e.mistakes.empty()) {
+      return "cannot read the profile " + p.string() + (e.mistakes.empty() ? "" : ": " + e.mistakes[0].message);
+    }
+    const ProfileMistake& first = e.mistakes[0];
+    return "the profile " + p.string() + " has " + std::to_string(e.mistakes.size()) +
+           (e.mistakes.size() == 1 ? " mistake" : " mistakes") + " (`hmc config check` lists them); the first, at " +
+           std::to_string(first.place.line) + ":" + std::to_string(first.place.column) + ": " + first.message;
+  }
+
   std::string_view text_;
   const std::string& file_;
+  const ReadOptions& options_;
   reading::Reporter r_;
   reading::QuantityReader q_{r_};
   reading::MotorTable motors_{r_, q_};
@@ -131,11 +183,12 @@ const MotorConfig* MotionFile::motor(const std::string& motor_name) const {
   return nullptr;
 }
 
-Result<MotionFile, std::vector<FileError>> parse_motion_file(const std::string& text, const std::string& path) {
-  return Checker(text, path).run();
+Result<MotionFile, std::vector<FileError>> parse_motion_file(const std::string& text, const std::string& path,
+                                                             const ReadOptions& options) {
+  return Checker(text, path, options).run();
 }
 
-Result<MotionFile, std::vector<FileError>> load_motion_file(const std::string& path) {
+Result<MotionFile, std::vector<FileError>> load_motion_file(const std::string& path, const ReadOptions& options) {
   const auto unreadable = [&](int error) {
     FileError e;
     e.where.file = path;
@@ -152,7 +205,7 @@ Result<MotionFile, std::vector<FileError>> load_motion_file(const std::string& p
   const int error = errno;
   std::fclose(f);
   if (failed) return unreadable(error);
-  return parse_motion_file(text, path);
+  return parse_motion_file(text, path, options);
 }
 
 }  // namespace hmc::motion

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "hmc/motion_file.h"
+#include "hmc/profile.h"
 #include "hmc/protocol_facts.h"
 #include "json_reader.h"
 
@@ -53,6 +54,7 @@ constexpr uint64_t kMaxUnrolledSteps = 1000000;
 constexpr double kMaxFadeMs = 3600000;
 constexpr double kMaxWaitMs = 86400000;
 constexpr double kJerkPerAccel = 10;  // default jerk: full acceleration reached in 0.1 s
+constexpr double kWholeStep = 1e-6;   // closer to a whole step than this is that step (not "rounded")
 
 // A fixed list of keys (or names), for membership, messages and suggestions.
 struct Keys {
@@ -90,7 +92,7 @@ constexpr ProfileKind kProfileKinds[] = {ProfileKind::kConstant, ProfileKind::kS
 std::string fmt(double v);
 // Names and keys as messages show them: on one line, control bytes escaped, long ones cut.
 std::string shown(std::string_view s);
-std::string quoted(std::string_view s);
+std::string single_quoted(std::string_view s);
 // Optimal string alignment distance (edits, with swaps of neighbours), for suggestions only.
 size_t edit_distance(std::string_view a, std::string_view b);
 
@@ -107,7 +109,7 @@ std::string suggestion(std::string_view word, const Names& candidates) {
       pick = c;
     }
   }
-  return pick.empty() ? std::string() : " (did you mean " + quoted(pick) + "?)";
+  return pick.empty() ? std::string() : " (did you mean " + single_quoted(pick) + "?)";
 }
 
 // Collects the mistakes of one file, each with where it is, and reads typed values, reporting
@@ -118,6 +120,11 @@ class Reporter {
 
   std::vector<FileError>& errors() { return errors_; }
   size_t count() const { return errors_.size(); }
+  // Notes: what is not a mistake but worth saying (a value rounded to a whole step).
+  std::vector<FileError>& notes() { return notes_; }
+  void note(const Value& v, const std::string& path, std::string message) {
+    notes_.push_back(FileError{location(v.at, path), {}, {}, std::move(message)});
+  }
 
   // ---- errors
 
@@ -146,7 +153,7 @@ class Reporter {
   }
   // A missing key: points at the object that lacks it.
   void missing(const Value& object, const std::string& path, std::string_view key, std::string expected) {
-    add(object.at, json::path_with_key(path, key), std::move(expected), "nothing", "missing " + quoted(key));
+    add(object.at, json::path_with_key(path, key), std::move(expected), "nothing", "missing " + single_quoted(key));
   }
 
   // Reports every key of `object` not in `keys`; true when there are none.
@@ -157,7 +164,7 @@ class Reporter {
       ok = false;
       const std::string expected = "one of " + keys.list();
       add(m.at, json::path_with_key(path, m.key), expected, found(m),
-          "unknown key " + quoted(m.key) + "; expected " + expected + suggestion(m.key, keys));
+          "unknown key " + single_quoted(m.key) + "; expected " + expected + suggestion(m.key, keys));
     }
     return ok;
   }
@@ -214,10 +221,18 @@ class Reporter {
   std::string_view text_;
   const std::string& file_;
   std::vector<FileError> errors_;
+  std::vector<FileError> notes_;
 };
 
 // Quantities: a plain number is the base unit; an object names one unit.
 enum class Dim : uint8_t { kDistance, kSpeed, kAccel, kJerk };
+
+// How one motor's units become steps.
+struct Scale {
+  double per_degree = 0;  // steps per output degree; 0: the gearing is unknown or broken
+  double per_mm = 0;      // steps per mm on a linear axis of a profile, whose units are mm, not deg
+  double sign = 1;        // -1: the profile inverts the axis (distances and positions in its sense)
+};
 
 // A quantity as read: the value in the base unit and where its number is.
 struct Quantity {
@@ -233,10 +248,10 @@ class QuantityReader {
  public:
   explicit QuantityReader(Reporter& r) : r_(r) {}
 
-  // A quantity in the base unit. `steps_per_degree` is 0 when the motor's gearing is unknown or
-  // broken: then degrees and revolutions are read but not converted (nothing is returned, and
-  // nothing reported for it).
-  std::optional<Quantity> quantity(const Value& v, const std::string& path, Dim dim, double steps_per_degree);
+  // A quantity in the base unit. With the motor's gearing unknown or broken (scale.per_degree 0),
+  // degrees, millimetres and revolutions are read but not converted (nothing is returned, and
+  // nothing reported for it). A linear axis of a profile takes mm where others take deg.
+  std::optional<Quantity> quantity(const Value& v, const std::string& path, Dim dim, const Scale& scale);
   // "90 deg/s (800 steps/s)" or "800 steps/s".
   static std::string described(const Quantity& q, const char* base_unit);
   bool speed_ok(const Quantity& q);
@@ -255,6 +270,10 @@ struct MotorEntry {
   bool scale_ok = true;
   bool number_ok = true;
   bool accel_ok = true;  // its default acceleration is what the file says
+  double steps_per_mm = 0;  // a linear axis of a profile
+  double sign = 1;          // -1: an axis the profile inverts
+
+  Scale scale() const { return scale_ok ? Scale{config.steps_per_degree(), steps_per_mm, sign} : Scale{}; }
 };
 
 // The file's "motors", and the motor names steps use.
@@ -264,6 +283,9 @@ class MotorTable {
 
   // Reads "motors" into `out` (every declared motor, a broken one too).
   void read(const Value& v, const std::string& path, std::vector<MotorConfig>& out);
+  // Takes the motors from a machine profile instead: one per axis, named as the axis, with its
+  // gearing, units, direction, default speed and acceleration and soft limits.
+  void from_profile(const hmc::Profile& profile, const Location& where, std::vector<MotorConfig>& out);
 
   const MotorEntry* find_motor(std::string_view name) const;
   // A reference to a declared motor. With "motors" itself broken, names are not checked.
@@ -280,7 +302,7 @@ class MotorTable {
  private:
   MotorEntry motor(const Value& v, const std::string& path, const std::string& name,
                    std::map<uint32_t, std::string>& numbers);
-  void limits(const Value& v, const std::string& path, double scale, MotorConfig& c);
+  void limits(const Value& v, const std::string& path, const Scale& scale, MotorConfig& c);
   std::string declared_names() const;
 
   Reporter& r_;
@@ -296,6 +318,9 @@ class StepChecker {
 
   // Checks a list of steps into `out`; returns how many steps they unroll to.
   uint64_t steps(const Value& list, const std::string& path, int repeat_depth, std::vector<Step>& out);
+  // Where the broken steps that may move motors are: each stands in the steps as an empty wait
+  // (a placeholder), so that planning the rest can tell where positions stop being followed.
+  const std::vector<Location>& broken() const { return broken_; }
 
  private:
   // One step; returns its unrolled size (0 when it yields no step).
@@ -315,6 +340,8 @@ class StepChecker {
   Reporter& r_;
   QuantityReader& q_;
   MotorTable& motors_;
+  std::vector<Location> broken_;
+  bool unconverted_ = false;  // a distance of this step could not be converted (its motor's gearing is broken)
 };
 
 }  // namespace hmc::motion::reading

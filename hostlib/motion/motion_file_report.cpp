@@ -15,7 +15,7 @@ std::string fmt(double v) {
 }
 
 std::string shown(std::string_view s) { return json::excerpt(s, 0, s.size()); }
-std::string quoted(std::string_view s) { return "'" + shown(s) + "'"; }
+std::string single_quoted(std::string_view s) { return "'" + shown(s) + "'"; }
 
 size_t edit_distance(std::string_view a, std::string_view b) {
   if (a.size() > b.size() + 2 || b.size() > a.size() + 2) return 3;  // too far apart to suggest

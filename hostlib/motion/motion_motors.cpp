@@ -52,7 +52,7 @@ MotorEntry MotorTable::motor(const Value& v, const std::string& path, const std:
       c.motor = *motor;
       if (const auto owner = numbers.find(*motor); owner != numbers.end()) {
         r_.bad(*n, p, "each of the board's motors 1-3 once",
-               "motor " + fmt(*motor) + " is already " + quoted(owner->second));
+               "motor " + fmt(*motor) + " is already " + single_quoted(owner->second));
         e.number_ok = false;
       } else {
         numbers.emplace(*motor, name);
@@ -110,7 +110,7 @@ MotorEntry MotorTable::motor(const Value& v, const std::string& path, const std:
       }
     }
   }
-  const double scale = e.scale_ok ? c.steps_per_degree() : 0;  // 0: unknown
+  const Scale scale = e.scale();
 
   if (const Value* n = r_.get(v, "speed")) {
     if (auto q = q_.quantity(*n, json::path_with_key(path, "speed"), Dim::kSpeed, scale); q && q_.speed_ok(*q)) {
@@ -128,7 +128,7 @@ MotorEntry MotorTable::motor(const Value& v, const std::string& path, const std:
   return e;
 }
 
-void MotorTable::limits(const Value& v, const std::string& path, double scale, MotorConfig& c) {
+void MotorTable::limits(const Value& v, const std::string& path, const Scale& scale, MotorConfig& c) {
   if (!v.is(Kind::kObject)) {
     r_.wrong_type(v, path, "an object with min and/or max");
     return;
@@ -179,7 +179,7 @@ const MotorEntry* MotorTable::motor_ref(const Value& v, const std::string& path,
     std::string expected =
         motors_.empty() ? "a motor declared in \"motors\"" : "a motor the file declares: " + declared_names();
     if (allow_all) expected += ", or \"all\"";
-    r_.bad(v, path, expected, "unknown motor " + quoted(v.string) + suggestion(v.string, names));
+    r_.bad(v, path, expected, "unknown motor " + single_quoted(v.string) + suggestion(v.string, names));
   }
   return e;
 }
@@ -212,7 +212,7 @@ std::optional<MotorTable::Names> MotorTable::motor_names(const Value& v, const s
       }
       if (motor_ref(item, item_path, false) == nullptr && !item.is(Kind::kString)) continue;
       if (!seen.insert(item.string).second) {
-        r_.bad(item, item_path, "each motor once", quoted(item.string) + " is listed twice");
+        r_.bad(item, item_path, "each motor once", single_quoted(item.string) + " is listed twice");
         continue;
       }
       out.names.push_back(item.string);
@@ -223,6 +223,30 @@ std::optional<MotorTable::Names> MotorTable::motor_names(const Value& v, const s
   }
   if (r_.count() != before) return std::nullopt;
   return out;
+}
+
+void MotorTable::from_profile(const hmc::Profile& profile, const Location& where, std::vector<MotorConfig>& out) {
+  motors_known_ = true;
+  for (const hmc::Axis& axis : profile.axes) {
+    MotorEntry e;
+    MotorConfig& c = e.config;
+    c.name = axis.name;
+    c.motor = axis.motor;
+    c.full_steps_per_rev = axis.steps_per_rev;
+    c.microstep = axis.microstep;
+    c.gear_ratio = axis.gear_ratio;
+    c.where = where;
+    const double per_unit = axis.steps_per_unit();  // per mm or per degree
+    if (!axis.rotary) e.steps_per_mm = per_unit;
+    e.sign = axis.invert ? -1 : 1;
+    if (axis.speed) c.speed = *axis.speed * per_unit;
+    if (axis.accel) c.accel = *axis.accel * per_unit;
+    // The limits in the axis's sense, as the motor counts: an inverted axis swaps them.
+    if (axis.limit_min) (axis.invert ? c.max_position : c.min_position) = *axis.limit_min * per_unit * e.sign;
+    if (axis.limit_max) (axis.invert ? c.min_position : c.max_position) = *axis.limit_max * per_unit * e.sign;
+    motors_.push_back(e);
+  }
+  for (const MotorEntry& e : motors_) out.push_back(e.config);
 }
 
 }  // namespace hmc::motion::reading

@@ -15,6 +15,7 @@
 #include "coordinated_move.h"
 #include "hmc/codec.h"
 #include "motor_move.h"
+#include "plan_check.h"
 #include "ramp_shapes.h"
 
 namespace hmc::motion {
@@ -38,15 +39,20 @@ bool has_location(const Location& l) { return l.line != 0 || !l.path.empty(); }
 
 class Planner {
  public:
-  Planner(const MotionFile& file, const PlanOptions& options) : file_(file), options_(options) {
+  // With `broken`, the planner checks a file with mistakes (plan_check.h): the steps at those
+  // locations are placeholders, and only mistakes of position are kept.
+  Planner(const MotionFile& file, const PlanOptions& options, const std::vector<Location>* broken = nullptr)
+      : file_(file), options_(options), broken_(broken) {
     for (uint32_t m = 0; m < proto::kMotorCount; ++m) {
       motors_[m].position = options.start_position[m].value_or(0);
+      motors_[m].exact = static_cast<double>(motors_[m].position);
       motors_[m].known = options.start_position[m].has_value();
     }
   }
 
   Result<Plan, std::vector<FileError>> run() {
     walk(file_.steps, "");
+    if (broken_ != nullptr) return errors_;
     check_budget();
     if (!errors_.empty()) {
       std::stable_sort(errors_.begin(), errors_.end(), [](const FileError& a, const FileError& b) {
@@ -63,7 +69,9 @@ class Planner {
  private:
   struct MotorState {
     int64_t position = 0;  // steps; when not known, counted from wherever the motor was
+    double exact = 0;      // the position before rounding to a whole step: relative moves add to it
     bool known = false;
+    bool lost = false;     // checking: a broken step came since the position was last set
     double busy_until = 0;
     // The last motion, while a stop may still cut it short.
     bool moving = false;
@@ -74,7 +82,16 @@ class Planner {
   };
 
   void error(const Location& where, std::string expected, std::string found, std::string message) {
+    if (broken_ != nullptr) return;  // checking: only mistakes of position (plan_check.h)
     errors_.push_back(FileError{where, std::move(expected), std::move(found), std::move(message)});
+  }
+  void position_error(const Location& where, std::string expected, std::string found, std::string message) {
+    errors_.push_back(FileError{where, std::move(expected), std::move(found), std::move(message)});
+  }
+  bool is_broken(const Location& where) const {
+    return std::any_of(broken_->begin(), broken_->end(), [&](const Location& b) {
+      return b.line == where.line && b.column == where.column && b.path == where.path;
+    });
   }
 
   const MotorConfig* motor(const std::string& name, const Location& where) {
@@ -113,6 +130,10 @@ class Planner {
 
   void walk(const std::vector<Step>& steps, const std::string& pass) {
     for (const Step& step : steps) {
+      if (broken_ != nullptr && is_broken(step.where)) {
+        for (MotorState& ms : motors_) ms.lost = true;
+        continue;
+      }
       if (const auto* r = std::get_if<RepeatStep>(&step.action)) {
         for (uint32_t i = 1; i <= r->count; ++i) {
           const std::string mine = "repeat " + std::to_string(i) + " of " + std::to_string(r->count);
@@ -166,7 +187,9 @@ class Planner {
     for (const MotorConfig* c : configs) {
       MotorState& ms = motors_[c->motor - 1];
       ms.position = 0;
+      ms.exact = 0;
       ms.known = true;
+      ms.lost = false;
       ms.busy_until = a.end_s;
       ms.moving = false;
     }
@@ -189,11 +212,22 @@ class Planner {
         }
       }
       MotorState& ms = motors_[it.config->motor - 1];
-      const int64_t target = std::llround(mv->distance);
+      // Where it ends: a relative move from the exact end of the one before, so that roundings to
+      // whole steps never add up beyond half a step.
+      const double exact = mv->exact.value_or(mv->distance);
+      it.exact_end = mv->absolute ? exact : ms.exact + exact;
+      const int64_t target = std::llround(mv->absolute ? mv->distance : it.exact_end);
       std::string what;
       if (mv->absolute) {
+        if (!ms.known && ms.lost) {  // checking, after a broken step: the position counts from here
+          ms.position = target;
+          ms.exact = it.exact_end;
+          ms.known = true;
+          ms.lost = false;
+          continue;
+        }
         if (!ms.known) {
-          error(
+          position_error(
               it.where, "a known position (home first, or a relative move)", "an unknown position",
               "the position of " + mv->motor + " is not known here: home it first, or move it by a relative distance");
           continue;
@@ -201,23 +235,23 @@ class Planner {
         it.delta = target - ms.position;
         what = " to " + std::to_string(target) + " (" + signed_steps(it.delta) + ")";
       } else {
-        it.delta = target;
+        it.delta = target - ms.position;
         what = " " + signed_steps(it.delta);
       }
       words += (items.empty() ? " " : ", ") + mv->motor + what + " (" + profile_words(mv->profile) + ")";
-      if (static_cast<uint64_t>(std::llabs(it.delta)) > proto::kIntMax) {
-        error(it.where, "at most " + std::to_string(proto::kIntMax) + " steps", std::to_string(it.delta),
+      if (static_cast<uint64_t>(std::llabs(it.delta)) > proto::kIntMax && !(ms.lost && mv->absolute)) {
+        position_error(it.where, "at most " + std::to_string(proto::kIntMax) + " steps", std::to_string(it.delta),
               mv->motor + "'s move is longer than one STM can count");
         continue;
       }
-      if (ms.known) {
+      if (ms.known && !ms.lost) {
         const int64_t end = ms.position + it.delta;
         const MotorConfig& c = *it.config;
         const auto e = static_cast<double>(end);
         if ((c.min_position && e < *c.min_position) || (c.max_position && e > *c.max_position)) {
           const bool low = c.min_position && e < *c.min_position;
           const double limit = low ? *c.min_position : *c.max_position;
-          error(it.where, std::string(low ? "a position of at least " : "a position of at most ") + num(limit),
+          position_error(it.where, std::string(low ? "a position of at least " : "a position of at most ") + num(limit),
                 std::to_string(end),
                 mv->motor + " would end at " + std::to_string(end) + " steps, beyond its soft limit of " + num(limit) +
                     " steps");
@@ -261,6 +295,8 @@ class Planner {
       Item& it = items[k];
       MotorState& ms = motors_[it.config->motor - 1];
       ms.position += it.delta;
+      ms.exact = it.exact_end;
+      if (it.move->absolute) ms.lost = false;
       std::vector<Stage> stages;
       if (it.planned) {
         const double t0 = start + off[k];
@@ -502,8 +538,10 @@ class Planner {
   std::array<MotorState, proto::kMotorCount> motors_;
   std::array<Colour, proto::kStripCount> strips_{};  // black at the start of the file
   double now_ = 0;
+  const std::vector<Location>* broken_;
   std::vector<FileError> errors_;
-  Coordinator coordinator_{options_, errors_};
+  std::vector<FileError> unused_errors_;  // checking: the coordinator's are not of position
+  Coordinator coordinator_{options_, broken_ != nullptr ? unused_errors_ : errors_};
   Plan plan_;
 };
 
@@ -511,6 +549,12 @@ class Planner {
 
 Result<Plan, std::vector<FileError>> plan_motion(const MotionFile& file, const PlanOptions& options) {
   return Planner(file, options).run();
+}
+
+std::vector<FileError> planning::position_mistakes(const MotionFile& partial, const std::vector<Location>& broken) {
+  const PlanOptions options;  // as a check plans: no start positions known, our firmware
+  auto result = Planner(partial, options, &broken).run();
+  return result.ok() ? std::vector<FileError>{} : result.error();
 }
 
 }  // namespace hmc::motion

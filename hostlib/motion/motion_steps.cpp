@@ -36,7 +36,7 @@ uint64_t StepChecker::step(const Value& v, const std::string& path, int repeat_d
       action = &m;
     } else {
       r_.add(m.at, json::path_with_key(path, m.key), "one action per step", r_.found(m),
-             "a step has one action: " + quoted(m.key) + " comes after " + quoted(action->key));
+             "a step has one action: " + single_quoted(m.key) + " comes after " + single_quoted(action->key));
     }
   }
   if (action == nullptr) {
@@ -71,7 +71,18 @@ uint64_t StepChecker::step(const Value& v, const std::string& path, int repeat_d
   } else {  // stop
     ok = stop(a, p, s);
   }
-  if (!ok || r_.count() != before) return 0;
+  if (!ok || r_.count() != before || unconverted_) {
+    // A broken step that may move motors leaves a placeholder (broken()); the others move none.
+    if (action->key != "servo" && action->key != "led" && action->key != "wait") {
+      Step placeholder;
+      placeholder.where = s.where;
+      placeholder.action = WaitStep{};
+      out.push_back(std::move(placeholder));
+      broken_.push_back(s.where);
+    }
+    unconverted_ = false;
+    return 0;
+  }
   out.push_back(std::move(s));
   return size;
 }
@@ -84,7 +95,7 @@ bool StepChecker::home(const Value& v, const std::string& path, Step& s) {
     const MotorEntry* e = motors_.find_motor(names->names[i]);
     if (e == nullptr || e->config.motor == 0 || proto::motor_has_switches(e->config.motor)) continue;
     r_.bad(*names->nodes[i], path, "motors with limit switches (the board's motors 1 and 2)",
-           quoted(names->names[i]) + " is the board's motor " + fmt(e->config.motor) +
+           single_quoted(names->names[i]) + " is the board's motor " + fmt(e->config.motor) +
                ", which has no limit switches to home against");
     ok = false;
   }
@@ -131,7 +142,7 @@ bool StepChecker::together(const Value& v, const std::string& path, Step& s) {
     if (name != nullptr && name->is(Kind::kString) && motors_.find_motor(name->string) != nullptr &&
         !moving.insert(name->string).second) {
       r_.bad(*name, json::path_with_key(p, "motor"), "each motor once in a together step",
-             quoted(name->string) + " already moves in this step");
+             single_quoted(name->string) + " already moves in this step");
     }
     if (m) t.moves.push_back(std::move(*m));
   }
@@ -157,7 +168,7 @@ std::optional<Move> StepChecker::move(const Value& v, const std::string& path, b
   } else {
     r_.missing(v, path, "motor", "a motor name");
   }
-  const double scale = e != nullptr && e->scale_ok ? e->config.steps_per_degree() : 0;  // 0: unknown
+  const Scale scale = e != nullptr ? e->scale() : Scale{};
 
   // Where to: exactly one of by and to.
   const json::Member* by = v.find("by");
@@ -166,8 +177,8 @@ std::optional<Move> StepChecker::move(const Value& v, const std::string& path, b
     const json::Member& later = by->at.offset > to->at.offset ? *by : *to;
     const json::Member& earlier = &later == by ? *to : *by;
     r_.add(later.at, json::path_with_key(path, later.key), "either 'by' or 'to'", r_.found(later),
-           "a move has either 'by' (relative) or 'to' (absolute), not both: " + quoted(later.key) + " after " +
-               quoted(earlier.key));
+           "a move has either 'by' (relative) or 'to' (absolute), not both: " + single_quoted(later.key) + " after " +
+               single_quoted(earlier.key));
   } else if (by != nullptr) {
     const std::string p = json::path_with_key(path, "by");
     if (auto q = q_.quantity(by->value, p, Dim::kDistance, scale)) {
@@ -177,7 +188,15 @@ std::optional<Move> StepChecker::move(const Value& v, const std::string& path, b
                q_.described(*q, "steps") + " moves 0 steps");
       } else if (q_.steps_ok(*q, steps)) {
         m.distance = steps;
+        if (std::fabs(q->value - steps) > kWholeStep) {
+          m.exact = q->value;
+          r_.note(*q->node, q->path,
+                  q->written + " is " + fmt(q->value) +
+                      " steps: the move ends at the whole step nearest its exact end, so roundings do not add up");
+        }
       }
+    } else {
+      unconverted_ = true;
     }
   } else if (to != nullptr) {
     const std::string p = json::path_with_key(path, "to");
@@ -186,6 +205,10 @@ std::optional<Move> StepChecker::move(const Value& v, const std::string& path, b
       const double steps = std::round(q->value) + 0.0;  // + 0.0: no -0
       if (q_.steps_ok(*q, steps)) {
         m.distance = steps;
+        if (std::fabs(q->value - steps) > kWholeStep) {
+          m.exact = q->value;
+          r_.note(*q->node, q->path, "position " + q->written + " is " + fmt(q->value) + " steps: rounded to " + fmt(steps));
+        }
         const MotorConfig* c = e != nullptr ? &e->config : nullptr;
         const bool below = c != nullptr && c->min_position && steps < *c->min_position;
         const bool above = c != nullptr && c->max_position && steps > *c->max_position;
@@ -204,6 +227,8 @@ std::optional<Move> StepChecker::move(const Value& v, const std::string& path, b
                      " steps");
         }
       }
+    } else {
+      unconverted_ = true;
     }
   } else {
     r_.add(v.at, json::path_with_key(path, "by"), "'by' (a relative distance) or 'to' (a position)", "nothing",
@@ -246,7 +271,7 @@ std::optional<Move> StepChecker::move(const Value& v, const std::string& path, b
       }
       if (!kind_known) {
         r_.bad(*profile, p, expected,
-               "unknown profile " + quoted(profile->string) + suggestion(profile->string, kProfiles));
+               "unknown profile " + single_quoted(profile->string) + suggestion(profile->string, kProfiles));
       } else if ((prof.kind == ProfileKind::kTrapezoid || prof.kind == ProfileKind::kSCurve) && prof.accel <= 0 &&
                  accel_known) {
         r_.bad(*profile, p, "an acceleration above 0, in the move's 'accel' or its motor's",

@@ -1,6 +1,7 @@
 // Motion files: unit conversion (QuantityReader, motion_file_check.h). A quantity is a plain
 // number in the base unit (steps, steps/s, steps/s², steps/s³) or an object naming one unit;
-// degrees and revolutions are of the motor's output, through its gearing.
+// degrees and revolutions are of the motor's output, through its gearing; millimetres are of a
+// linear axis of the machine profile the file names (docs/config.md), through its drive.
 #include <cmath>
 #include <string>
 
@@ -9,19 +10,42 @@
 namespace hmc::motion::reading {
 namespace {
 
+// A unit is the base unit, or so many output degrees, or so many millimetres of a linear axis.
+enum class Through : uint8_t { kBase, kDegrees, kMillimetres };
 struct Unit {
   std::string_view key;
-  double degrees;  // output degrees per unit; 0: the base unit (steps...)
+  Through through;
+  double factor;  // degrees or millimetres per unit
   const char* label;
 };
-constexpr Unit kDistanceUnits[] = {{"steps", 0, "steps"}, {"deg", 1, "deg"}, {"rev", 360, "rev"}};
-constexpr Unit kSpeedUnits[] = {{"steps_per_s", 0, "steps/s"}, {"deg_per_s", 1, "deg/s"}, {"rpm", 6, "rpm"}};
-constexpr Unit kAccelUnits[] = {{"steps_per_s2", 0, "steps/s²"}, {"deg_per_s2", 1, "deg/s²"}};
-constexpr Unit kJerkUnits[] = {{"steps_per_s3", 0, "steps/s³"}, {"deg_per_s3", 1, "deg/s³"}};
+constexpr Unit kDistanceUnits[] = {
+    {"steps", Through::kBase, 1, "steps"}, {"deg", Through::kDegrees, 1, "deg"}, {"rev", Through::kDegrees, 360, "rev"}};
+constexpr Unit kSpeedUnits[] = {{"steps_per_s", Through::kBase, 1, "steps/s"},
+                                {"deg_per_s", Through::kDegrees, 1, "deg/s"},
+                                {"rpm", Through::kDegrees, 6, "rpm"}};
+constexpr Unit kAccelUnits[] = {{"steps_per_s2", Through::kBase, 1, "steps/s²"},
+                                {"deg_per_s2", Through::kDegrees, 1, "deg/s²"}};
+constexpr Unit kJerkUnits[] = {{"steps_per_s3", Through::kBase, 1, "steps/s³"},
+                               {"deg_per_s3", Through::kDegrees, 1, "deg/s³"}};
+// A linear axis of a profile: millimetres where the others have degrees (as `hmc move` takes them).
+constexpr Unit kLinearDistanceUnits[] = {{"steps", Through::kBase, 1, "steps"},
+                                         {"mm", Through::kMillimetres, 1, "mm"},
+                                         {"rev", Through::kDegrees, 360, "rev"}};
+constexpr Unit kLinearSpeedUnits[] = {{"steps_per_s", Through::kBase, 1, "steps/s"},
+                                      {"mm_per_s", Through::kMillimetres, 1, "mm/s"},
+                                      {"rpm", Through::kDegrees, 6, "rpm"}};
+constexpr Unit kLinearAccelUnits[] = {{"steps_per_s2", Through::kBase, 1, "steps/s²"},
+                                      {"mm_per_s2", Through::kMillimetres, 1, "mm/s²"}};
+constexpr Unit kLinearJerkUnits[] = {{"steps_per_s3", Through::kBase, 1, "steps/s³"},
+                                     {"mm_per_s3", Through::kMillimetres, 1, "mm/s³"}};
 constexpr std::string_view kDistanceKeys[] = {"steps", "deg", "rev"};
 constexpr std::string_view kSpeedKeys[] = {"steps_per_s", "deg_per_s", "rpm"};
 constexpr std::string_view kAccelKeys[] = {"steps_per_s2", "deg_per_s2"};
 constexpr std::string_view kJerkKeys[] = {"steps_per_s3", "deg_per_s3"};
+constexpr std::string_view kLinearDistanceKeys[] = {"steps", "mm", "rev"};
+constexpr std::string_view kLinearSpeedKeys[] = {"steps_per_s", "mm_per_s", "rpm"};
+constexpr std::string_view kLinearAccelKeys[] = {"steps_per_s2", "mm_per_s2"};
+constexpr std::string_view kLinearJerkKeys[] = {"steps_per_s3", "mm_per_s3"};
 
 struct DimInfo {
   const Unit* units;
@@ -29,7 +53,24 @@ struct DimInfo {
   Keys keys;
   const char* expected;  // the shapes it takes
 };
-DimInfo dim_info(Dim dim) {
+DimInfo dim_info(Dim dim, bool linear) {
+  if (linear) {
+    switch (dim) {
+      case Dim::kDistance:
+        return {kLinearDistanceUnits, 3, kLinearDistanceKeys,
+                "a number of steps, or an object with one of steps, mm, rev"};
+      case Dim::kSpeed:
+        return {kLinearSpeedUnits, 3, kLinearSpeedKeys,
+                "a number of steps/s, or an object with one of steps_per_s, mm_per_s, rpm"};
+      case Dim::kAccel:
+        return {kLinearAccelUnits, 2, kLinearAccelKeys,
+                "a number of steps/s², or an object with one of steps_per_s2, mm_per_s2"};
+      case Dim::kJerk:
+        break;
+    }
+    return {kLinearJerkUnits, 2, kLinearJerkKeys,
+            "a number of steps/s³, or an object with one of steps_per_s3, mm_per_s3"};
+  }
   switch (dim) {
     case Dim::kDistance:
       return {kDistanceUnits, 3, kDistanceKeys, "a number of steps, or an object with one of steps, deg, rev"};
@@ -45,12 +86,9 @@ DimInfo dim_info(Dim dim) {
 
 }  // namespace
 
-// A quantity in the base unit. `steps_per_degree` is 0 when the motor's gearing is unknown or
-// broken: then degrees and revolutions are read but not converted (nothing is returned, and
-// nothing reported for it).
 std::optional<Quantity> QuantityReader::quantity(const Value& v, const std::string& path, Dim dim,
-                                                 double steps_per_degree) {
-  const DimInfo info = dim_info(dim);
+                                                 const Scale& scale) {
+  const DimInfo info = dim_info(dim, scale.per_mm > 0);
   Quantity q;
   const Unit* unit = &info.units[0];
   if (v.is(Kind::kNumber)) {
@@ -65,7 +103,7 @@ std::optional<Quantity> QuantityReader::quantity(const Value& v, const std::stri
     if (v.members.size() > 1) {
       const json::Member& extra = v.members[1];
       r_.add(extra.at, json::path_with_key(path, extra.key), "one unit key", r_.found(extra),
-             "one unit only: " + quoted(extra.key) + " after " + quoted(v.members[0].key));
+             "one unit only: " + single_quoted(extra.key) + " after " + single_quoted(v.members[0].key));
       return std::nullopt;
     }
     const json::Member& m = v.members[0];
@@ -84,12 +122,15 @@ std::optional<Quantity> QuantityReader::quantity(const Value& v, const std::stri
   }
   const double n = q.node->number;
   q.written = fmt(n) + " " + unit->label;
-  q.base = unit->degrees == 0;
-  if (q.base) {
-    q.value = n;
+  // An inverted axis counts distances and positions the other way; a speed is a magnitude.
+  const double sign = dim == Dim::kDistance ? scale.sign : 1;
+  q.base = unit->through == Through::kBase && sign == 1;
+  if (unit->through == Through::kBase) {
+    q.value = n * sign;
   } else {
-    if (steps_per_degree <= 0) return std::nullopt;
-    q.value = n * unit->degrees * steps_per_degree;
+    if (scale.per_degree <= 0) return std::nullopt;
+    const double per = unit->through == Through::kDegrees ? scale.per_degree : scale.per_mm;
+    q.value = n * unit->factor * per * sign;
     if (!std::isfinite(q.value)) {
       r_.bad(*q.node, q.path, "a value that converts to a finite number of steps", q.written + " is too large");
       return std::nullopt;
