@@ -1,5 +1,6 @@
 // Motion files: the "motors" (MotorTable, motion_file_check.h) — each motor's number, gearing,
 // default speed and acceleration and soft limits, and the motor names that steps use.
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <string>
@@ -239,8 +240,28 @@ void MotorTable::from_profile(const hmc::Profile& profile, const Location& where
     const double per_unit = axis.steps_per_unit();  // per mm or per degree
     if (!axis.rotary) e.steps_per_mm = per_unit;
     e.sign = axis.invert ? -1 : 1;
-    if (axis.speed) c.speed = *axis.speed * per_unit;
-    if (axis.accel) c.accel = *axis.accel * per_unit;
+    // The profile checks its own values; the board's ranges in steps are checked here.
+    const std::string unit = axis.rotary ? " deg" : " mm";
+    if (axis.speed) {
+      c.speed = *axis.speed * per_unit;
+      if (!(c.speed >= kMinRate && c.speed <= kMaxRate)) {
+        r_.errors().push_back(FileError{where, "a speed from one step per 89 s to " + fmt(kMaxRate) + " steps/s",
+                                        fmt(*axis.speed) + unit + "/s",
+                                        "axis " + single_quoted(axis.name) + "'s speed " + fmt(*axis.speed) + unit +
+                                            "/s is " + fmt(c.speed) + " steps/s, beyond what the board can time"});
+        c.speed = std::clamp(c.speed, kMinRate, kMaxRate);
+      }
+    }
+    if (axis.accel) {
+      c.accel = *axis.accel * per_unit;
+      if (!(c.accel >= 0 && c.accel <= kMaxAccel)) {
+        r_.errors().push_back(FileError{where, "an acceleration from 0 to " + fmt(kMaxAccel) + " steps/s²",
+                                        fmt(*axis.accel) + unit + "/s²",
+                                        "axis " + single_quoted(axis.name) + "'s acceleration " + fmt(*axis.accel) +
+                                            unit + "/s² is " + fmt(c.accel) + " steps/s², out of the board's range"});
+        c.accel = std::clamp(c.accel, 0.0, kMaxAccel);
+      }
+    }
     // The limits in the axis's sense, as the motor counts: an inverted axis swaps them.
     if (axis.limit_min) (axis.invert ? c.max_position : c.min_position) = *axis.limit_min * per_unit * e.sign;
     if (axis.limit_max) (axis.invert ? c.min_position : c.max_position) = *axis.limit_max * per_unit * e.sign;
