@@ -3,14 +3,16 @@
 // axes' names, units, directions and limits, roundings that do not add up, and planning's
 // mistakes reported with reading's.
 #include <catch2/catch.hpp>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "hmc/motion_file.h"
 #include "hmc/motion_plan.h"
 
-#ifndef HMC_EXAMPLES_DIR
-#error "HMC_EXAMPLES_DIR must be defined by the build"
+#if !defined(HMC_EXAMPLES_DIR) || !defined(HMC_DOCS_DIR)
+#error "HMC_EXAMPLES_DIR and HMC_DOCS_DIR must be defined by the build"
 #endif
 
 namespace {
@@ -244,4 +246,23 @@ TEST_CASE("one pass: planning's mistakes come with reading's, as far as the brok
     REQUIRE(r.ok());
     CHECK_FALSE(plan_motion(*r, {}).ok());
   }
+}
+
+TEST_CASE("docs/motion-files.md's examples with comments are valid files beside the example profiles") {
+  std::ifstream doc(HMC_DOCS_DIR "/motion-files.md");
+  REQUIRE(doc);
+  std::stringstream text;
+  text << doc.rdbuf();
+  const std::string md = text.str();
+  const std::string fence = "```jsonc\n";
+  int checked = 0;
+  for (size_t at = md.find(fence); at != std::string::npos; at = md.find(fence, at + 1)) {
+    const auto close = md.find("```", at + fence.size());
+    REQUIRE(close != std::string::npos);
+    const std::string block = md.substr(at + fence.size(), close - at - fence.size());
+    INFO(block);
+    parse_ok(block);
+    ++checked;
+  }
+  CHECK(checked > 0);
 }
