@@ -10,6 +10,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <set>
+#include <tuple>
 #include <utility>
 
 #include "coordinated_move.h"
@@ -37,11 +39,14 @@ bool has_location(const Location& l) { return l.line != 0 || !l.path.empty(); }
 // ---------------------------------------------------------------------------------------
 // The planner: walks the file once, keeping time, positions and what is still moving
 
+// A step's place in its file: its line and column.
+using Place = std::pair<uint32_t, uint32_t>;
+
 class Planner {
  public:
   // With `broken`, the planner checks a file with mistakes (plan_check.h): the steps at those
   // locations are placeholders, and only mistakes of position are kept.
-  Planner(const MotionFile& file, const PlanOptions& options, const std::vector<Location>* broken = nullptr)
+  Planner(const MotionFile& file, const PlanOptions& options, const std::set<Place>* broken = nullptr)
       : file_(file), options_(options), broken_(broken) {
     for (uint32_t m = 0; m < proto::kMotorCount; ++m) {
       motors_[m].position = options.start_position[m].value_or(0);
@@ -51,8 +56,11 @@ class Planner {
   }
 
   Result<Plan, std::vector<FileError>> run() {
+    if (broken_ != nullptr) {
+      walk_positions(file_.steps);
+      return errors_;
+    }
     walk(file_.steps, "");
-    if (broken_ != nullptr) return errors_;
     check_budget();
     if (!errors_.empty()) {
       std::stable_sort(errors_.begin(), errors_.end(), [](const FileError& a, const FileError& b) {
@@ -85,13 +93,10 @@ class Planner {
     if (broken_ != nullptr) return;  // checking: only mistakes of position (plan_check.h)
     errors_.push_back(FileError{where, std::move(expected), std::move(found), std::move(message)});
   }
+  // Checking reports a mistake once, not once for every time a repeat comes round to it.
   void position_error(const Location& where, std::string expected, std::string found, std::string message) {
+    if (broken_ != nullptr && !reported_.insert({where.line, where.column, message}).second) return;
     errors_.push_back(FileError{where, std::move(expected), std::move(found), std::move(message)});
-  }
-  bool is_broken(const Location& where) const {
-    return std::any_of(broken_->begin(), broken_->end(), [&](const Location& b) {
-      return b.line == where.line && b.column == where.column && b.path == where.path;
-    });
   }
 
   const MotorConfig* motor(const std::string& name, const Location& where) {
@@ -130,10 +135,6 @@ class Planner {
 
   void walk(const std::vector<Step>& steps, const std::string& pass) {
     for (const Step& step : steps) {
-      if (broken_ != nullptr && is_broken(step.where)) {
-        for (MotorState& ms : motors_) ms.lost = true;
-        continue;
-      }
       if (const auto* r = std::get_if<RepeatStep>(&step.action)) {
         for (uint32_t i = 1; i <= r->count; ++i) {
           const std::string mine = "repeat " + std::to_string(i) + " of " + std::to_string(r->count);
@@ -196,6 +197,105 @@ class Planner {
     now_ = a.end_s;
   }
 
+  // Where a move ends (it.delta, it.exact_end), and the mistakes of position: a `to` while the
+  // position is not known, a move longer than one STM, an end beyond a soft limit. False: the
+  // move is left out.
+  bool place(Item& it) {
+    const Move& mv = *it.move;
+    MotorState& ms = motors_[it.config->motor - 1];
+    // Where it ends: a relative move from the exact end of the one before, so that roundings to
+    // whole steps never add up beyond half a step.
+    const double exact = mv.exact.value_or(mv.distance);
+    it.exact_end = mv.absolute ? exact : ms.exact + exact;
+    const int64_t target = std::llround(mv.absolute ? mv.distance : it.exact_end);
+    if (mv.absolute && !ms.known && ms.lost) {  // checking, after a broken step: it counts from here
+      ms.position = target;
+      ms.exact = it.exact_end;
+      ms.known = true;
+      ms.lost = false;
+      return false;
+    }
+    if (mv.absolute && !ms.known) {
+      position_error(
+          it.where, "a known position (home first, or a relative move)", "an unknown position",
+          "the position of " + mv.motor + " is not known here: home it first, or move it by a relative distance");
+      return false;
+    }
+    it.delta = target - ms.position;
+    if (static_cast<uint64_t>(std::llabs(it.delta)) > proto::kIntMax && !(ms.lost && mv.absolute)) {
+      position_error(it.where, "at most " + std::to_string(proto::kIntMax) + " steps", std::to_string(it.delta),
+                     mv.motor + "'s move is longer than one STM can count");
+      return false;
+    }
+    if (ms.known && !ms.lost) {
+      const int64_t end = ms.position + it.delta;
+      const MotorConfig& c = *it.config;
+      const auto e = static_cast<double>(end);
+      if ((c.min_position && e < *c.min_position) || (c.max_position && e > *c.max_position)) {
+        const bool low = c.min_position && e < *c.min_position;
+        const double limit = low ? *c.min_position : *c.max_position;
+        position_error(it.where, std::string(low ? "a position of at least " : "a position of at most ") + num(limit),
+                       std::to_string(end),
+                       mv.motor + " would end at " + std::to_string(end) + " steps, beyond its soft limit of " +
+                           num(limit) + " steps");
+      }
+    }
+    return true;
+  }
+
+  // Moves a placed move's motor to its end (the motion itself is planned by moves()).
+  void arrive(const Item& it) {
+    MotorState& ms = motors_[it.config->motor - 1];
+    ms.position += it.delta;
+    ms.exact = it.exact_end;
+    if (it.move->absolute) ms.lost = false;
+  }
+
+  // Checking (plan_check.h): positions only, with no actions, times or frames, so that a file of
+  // many unrolled steps is checked quickly. A stop may cut a move short, which only its timing
+  // tells: positions are not followed after one.
+  void walk_positions(const std::vector<Step>& steps) {
+    for (const Step& step : steps) {
+      if (broken_->count({step.where.line, step.where.column}) != 0) {
+        for (MotorState& ms : motors_) ms.lost = true;
+      } else if (const auto* r = std::get_if<RepeatStep>(&step.action)) {
+        for (uint32_t i = 0; i < r->count; ++i) walk_positions(r->steps);
+      } else if (const auto* h = std::get_if<HomeStep>(&step.action)) {
+        for (const std::string& name : h->motors) {
+          const MotorConfig* c = motor(name, step.where);
+          if (c == nullptr || !proto::motor_has_switches(c->motor)) continue;
+          MotorState& ms = motors_[c->motor - 1];
+          ms.position = 0;
+          ms.exact = 0;
+          ms.known = true;
+          ms.lost = false;
+        }
+      } else if (const auto* st = std::get_if<StopStep>(&step.action)) {
+        for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+          bool named = st->motors.empty();
+          for (const std::string& name : st->motors) {
+            const MotorConfig* c = motor(name, step.where);
+            named = named || (c != nullptr && c->motor == m);
+          }
+          if (named) motors_[m - 1].lost = true;
+        }
+      } else {
+        std::vector<const Move*> list;
+        if (const auto* m = std::get_if<MoveStep>(&step.action)) list.push_back(&m->move);
+        if (const auto* t = std::get_if<TogetherStep>(&step.action)) {
+          for (const Move& mv : t->moves) list.push_back(&mv);
+        }
+        for (const Move* mv : list) {
+          Item it;
+          it.move = mv;
+          it.where = has_location(mv->where) ? mv->where : step.where;
+          it.config = motor(mv->motor, it.where);
+          if (it.config != nullptr && place(it)) arrive(it);
+        }
+      }
+    }
+  }
+
   void moves(const Step& step, const std::vector<const Move*>& list, bool together, bool wait,
              const std::string& pass) {
     std::vector<Item> items;
@@ -211,52 +311,12 @@ class Planner {
           error(it.where, "each motor once in a coordinated move", mv->motor, mv->motor + " is moved twice at once");
         }
       }
-      MotorState& ms = motors_[it.config->motor - 1];
-      // Where it ends: a relative move from the exact end of the one before, so that roundings to
-      // whole steps never add up beyond half a step.
-      const double exact = mv->exact.value_or(mv->distance);
-      it.exact_end = mv->absolute ? exact : ms.exact + exact;
-      const int64_t target = std::llround(mv->absolute ? mv->distance : it.exact_end);
-      std::string what;
-      if (mv->absolute) {
-        if (!ms.known && ms.lost) {  // checking, after a broken step: the position counts from here
-          ms.position = target;
-          ms.exact = it.exact_end;
-          ms.known = true;
-          ms.lost = false;
-          continue;
-        }
-        if (!ms.known) {
-          position_error(
-              it.where, "a known position (home first, or a relative move)", "an unknown position",
-              "the position of " + mv->motor + " is not known here: home it first, or move it by a relative distance");
-          continue;
-        }
-        it.delta = target - ms.position;
-        what = " to " + std::to_string(target) + " (" + signed_steps(it.delta) + ")";
-      } else {
-        it.delta = target - ms.position;
-        what = " " + signed_steps(it.delta);
-      }
+      if (!place(it)) continue;
+      const int64_t target = motors_[it.config->motor - 1].position + it.delta;
+      const std::string what = it.move->absolute
+                                   ? " to " + std::to_string(target) + " (" + signed_steps(it.delta) + ")"
+                                   : " " + signed_steps(it.delta);
       words += (items.empty() ? " " : ", ") + mv->motor + what + " (" + profile_words(mv->profile) + ")";
-      if (static_cast<uint64_t>(std::llabs(it.delta)) > proto::kIntMax && !(ms.lost && mv->absolute)) {
-        position_error(it.where, "at most " + std::to_string(proto::kIntMax) + " steps", std::to_string(it.delta),
-              mv->motor + "'s move is longer than one STM can count");
-        continue;
-      }
-      if (ms.known && !ms.lost) {
-        const int64_t end = ms.position + it.delta;
-        const MotorConfig& c = *it.config;
-        const auto e = static_cast<double>(end);
-        if ((c.min_position && e < *c.min_position) || (c.max_position && e > *c.max_position)) {
-          const bool low = c.min_position && e < *c.min_position;
-          const double limit = low ? *c.min_position : *c.max_position;
-          position_error(it.where, std::string(low ? "a position of at least " : "a position of at most ") + num(limit),
-                std::to_string(end),
-                mv->motor + " would end at " + std::to_string(end) + " steps, beyond its soft limit of " + num(limit) +
-                    " steps");
-        }
-      }
       items.push_back(std::move(it));
     }
     if (!wait) words += ", without waiting";
@@ -294,9 +354,7 @@ class Planner {
     for (size_t k = 0; k < items.size(); ++k) {
       Item& it = items[k];
       MotorState& ms = motors_[it.config->motor - 1];
-      ms.position += it.delta;
-      ms.exact = it.exact_end;
-      if (it.move->absolute) ms.lost = false;
+      arrive(it);
       std::vector<Stage> stages;
       if (it.planned) {
         const double t0 = start + off[k];
@@ -538,10 +596,10 @@ class Planner {
   std::array<MotorState, proto::kMotorCount> motors_;
   std::array<Colour, proto::kStripCount> strips_{};  // black at the start of the file
   double now_ = 0;
-  const std::vector<Location>* broken_;
+  const std::set<Place>* broken_;
+  std::set<std::tuple<uint32_t, uint32_t, std::string>> reported_;
   std::vector<FileError> errors_;
-  std::vector<FileError> unused_errors_;  // checking: the coordinator's are not of position
-  Coordinator coordinator_{options_, broken_ != nullptr ? unused_errors_ : errors_};
+  Coordinator coordinator_{options_, errors_};
   Plan plan_;
 };
 
@@ -552,8 +610,10 @@ Result<Plan, std::vector<FileError>> plan_motion(const MotionFile& file, const P
 }
 
 std::vector<FileError> planning::position_mistakes(const MotionFile& partial, const std::vector<Location>& broken) {
-  const PlanOptions options;  // as a check plans: no start positions known, our firmware
-  auto result = Planner(partial, options, &broken).run();
+  const PlanOptions options;  // as a check plans: no start positions known
+  std::set<Place> places;
+  for (const Location& b : broken) places.insert({b.line, b.column});
+  auto result = Planner(partial, options, &places).run();
   return result.ok() ? std::vector<FileError>{} : result.error();
 }
 

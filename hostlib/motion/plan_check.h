@@ -2,10 +2,11 @@
 // one run reports both kinds (motion_file.h). The file's sound steps are planned; each broken
 // step that may move motors stands in them as a placeholder at its location, after which no
 // motor's position is followed until it is homed or sent to an absolute position (a mistake
-// found from a position the broken step might have changed would be a guess). Only mistakes of
-// position are kept: a `to` before the position is known, a move beyond a soft limit, a move
+// found from a position the broken step might have changed would be a guess); nor is a stopped
+// motor's, since only timing tells where a stop cuts a move. Only mistakes of position are
+// found, each once: a `to` before the position is known, a move beyond a soft limit, a move
 // longer than one STM counts. Rates and timings depend on the broken values, so they wait for
-// the planning of the mended file.
+// the planning of the mended file; positions alone are followed, so this is quick.
 #pragma once
 
 #include <vector>
