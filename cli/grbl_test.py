@@ -201,6 +201,35 @@ code = proc.wait(timeout=10)
 check(code == 130, "Ctrl-C ends hmc grbl with 130, got %s" % code)
 err.seek(0)
 print(err.read().strip())
+
+# The same front end on TCP, with --link's name unused: a sender connects, moves, leaves.
+terr = open(os.path.join(work, "tcp.err"), "w+")
+tcp = subprocess.Popen([hmc, "--port", "sim://grbltcp?fast&fresh&nosave", "grbl", "--tcp", "127.0.0.1:0"],
+                       stderr=terr, stdout=subprocess.DEVNULL, env=env)
+address = None
+for _ in range(500):
+    terr.seek(0)
+    m = re.search(r"listening on tcp://127\.0\.0\.1:(\d+)", terr.read())
+    if m:
+        address = int(m.group(1))
+        break
+    time.sleep(0.02)
+check(address is not None, "hmc grbl --tcp prints its address")
+if address:
+    import socket
+    with socket.create_connection(("127.0.0.1", address)) as c:
+        c.settimeout(10)
+        got = b""
+        while b"for help]" not in got:
+            got += c.recv(256)
+        c.sendall(b"G1 X2 F600\n?")
+        while b"ok\r\n" not in got or not re.search(rb"<\w+\|", got):
+            got += c.recv(256)
+        check(b"\r\nGrbl 1.1h ['$' for help]\r\n" in got and b"ok\r\n" in got, "TCP: banner and ok: %r" % got)
+    time.sleep(0.3)
+    check(tcp.poll() is None, "hmc grbl --tcp goes on after its sender left")
+    tcp.send_signal(signal.SIGINT)
+    check(tcp.wait(timeout=10) == 130, "hmc grbl --tcp ends with 130 on Ctrl-C")
 if failures:
     print("grbl_test: %d failures" % len(failures))
     sys.exit(1)
