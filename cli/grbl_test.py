@@ -4,12 +4,14 @@ python3-serial): grbl's character counting (never more than 128 unanswered bytes
 a square, an arc, a servo, an LED and a dwell, bad input, and a sender that goes away mid-move.
 What the board did is read from the simulated board's trace: STEP edges per motor, the servo's
 pulse, the LED's colour.
-Usage: grbl_test.py HMC_BINARY SOURCE_DIR"""
+With hmc-sim (a board on TCP with a control channel): a limit switch and the emergency switch
+pressed during moves are ALARM:1 and ALARM:3, and the link watchdog is armed.
+Usage: grbl_test.py HMC_BINARY HMC_SIM_BINARY SOURCE_DIR"""
 import json, math, os, re, signal, subprocess, sys, tempfile, time
 
 import serial
 
-hmc = os.path.abspath(sys.argv[1])
+hmc, sim = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 work = tempfile.mkdtemp()
 trace = os.path.join(work, "trace.jsonl")
 env = dict(os.environ, HMC_SIM_STATE=os.path.join(work, "state"))
@@ -177,7 +179,8 @@ check(proc.poll() is None, "hmc grbl still runs after bad input")
 # The sender goes away mid-move: every motor stops.
 port.write(b"G1 X300 F300\n")
 check(answer(port) == "ok", "the long move is taken")
-while not status(port).startswith("<Run"):
+end = time.time() + 10
+while time.time() < end and not status(port).startswith("<Run"):
     time.sleep(0.01)
 port.close()
 time.sleep(0.5)
@@ -230,6 +233,85 @@ if address:
     check(tcp.poll() is None, "hmc grbl --tcp goes on after its sender left")
     tcp.send_signal(signal.SIGINT)
     check(tcp.wait(timeout=10) == 130, "hmc grbl --tcp ends with 130 on Ctrl-C")
+# A board of its own (hmc-sim on TCP): switches pressed during moves.
+serr = open(os.path.join(work, "sim.err"), "w+")
+board = subprocess.Popen([sim, "--tcp", "127.0.0.1:0", "--control", "127.0.0.1:0", "--no-self-test"],
+                         stderr=serr, stdout=subprocess.DEVNULL)
+ports = []
+for _ in range(500):
+    serr.seek(0)
+    ports = re.findall(r"listening on tcp://127\.0\.0\.1:(\d+)", serr.read())
+    if len(ports) == 2:
+        break
+    time.sleep(0.02)
+
+
+def control(command):
+    import socket
+    with socket.create_connection(("127.0.0.1", int(ports[1]))) as c:
+        c.sendall((command + "\n").encode())
+        return c.recv(4096).decode().strip()
+
+
+gerr = open(os.path.join(work, "board.err"), "w+")
+front = subprocess.Popen([hmc, "--port", "tcp://127.0.0.1:" + ports[0], "grbl", "--pty"], stderr=gerr,
+                         stdout=subprocess.DEVNULL, env=env)
+path = None
+for _ in range(500):
+    gerr.seek(0)
+    m = re.search(r"hmc grbl: pty (\S+)", gerr.read())
+    if m:
+        path = m.group(1)
+        break
+    time.sleep(0.02)
+port = serial.Serial(path, 115200, timeout=0.05)
+read_line(port), read_line(port)
+
+
+def alarm_during(move, inject):
+    port.write((move + "\n").encode())
+    check(answer(port) == "ok", move + " taken")
+    running, end = "", time.time() + 10
+    while time.time() < end and not running.startswith("<Run"):
+        running = status(port)
+    check(running.startswith("<Run"), move + " runs: " + running)
+    check(control(inject) == "ok", inject)
+    lines = []
+    end = time.time() + 10
+    while time.time() < end and not any(l.startswith("ALARM:") for l in lines):
+        lines.append(read_line(port))
+    lines += [read_line(port)]  # its [MSG:]
+    return lines
+
+
+lines = alarm_during("G1 X50 F600", "press 1 1")
+check("ALARM:1" in lines and any("limit switch" in l for l in lines), "a limit switch during a move: ALARM:1 %s" % lines)
+check(status(port).startswith("<Alarm"), "Alarm after the limit switch")
+control("auto 1 1")
+port.write(b"$X\n")
+check(answer(port) == "ok", "$X after the limit alarm")
+lines = alarm_during("G1 X-50 F600", "estop")
+check("ALARM:3" in lines and any("emergency" in l for l in lines), "the emergency switch during a move: ALARM:3 %s" % lines)
+msgs = []
+port.write(b"$X\n")
+check(answer(port, msgs) == "error:9", "$X refused while the emergency switch is pressed %s" % msgs)
+control("estop release")
+released, end = [], time.time() + 10
+while time.time() < end and not any("released" in l for l in released):
+    released.append(read_line(port))
+check(any("emergency switch was released" in l for l in released), "the release is told: %s" % released)
+port.write(b"$X\n")
+check(answer(port) == "ok", "$X once released")
+state = json.loads(control("status"))
+check(all(m["state"] == "idle" for m in state["motors"]), "every motor at rest: %s" % state["motors"])
+port.close()
+front.send_signal(signal.SIGINT)
+check(front.wait(timeout=10) == 130, "hmc grbl on hmc-sim ends with 130")
+gerr.seek(0)
+check("link watchdog" not in gerr.read(), "the watchdog armed without a note")
+board.send_signal(signal.SIGTERM)
+board.wait(timeout=10)
+
 if failures:
     print("grbl_test: %d failures" % len(failures))
     sys.exit(1)
