@@ -796,6 +796,10 @@ std::string FrontEnd::settings_text() const {
 }
 
 void FrontEnd::setting(const std::string& c) {
+  if ((state_ != State::kIdle && state_ != State::kAlarm) || current_ || !queue_.empty()) {
+    error(GrblError{kIdleError, "settings change only while the machine is idle"});
+    return;
+  }
   const size_t eq = c.find('=');
   if (eq == std::string::npos) {
     error(GrblError{kInvalidStatement, c + ": a setting is written $N=value"});

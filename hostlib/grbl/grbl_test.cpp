@@ -170,8 +170,22 @@ TEST_CASE("bad lines: grbl's errors with a message, and nothing moves") {
   CHECK(rig.talk("$100=-1\n").find("error:4\r\n") != std::string::npos);
   CHECK(rig.talk("$H\n").find("error:5\r\n") != std::string::npos);  // no axis homes
   CHECK(rig.talk("\n") == "ok\r\n");
+  CHECK(rig.talk("G4 P0.1\r\n") == "ok\r\n");  // CRLF ends one line: one answer
+  CHECK(rig.talk("?", ">\r\n").find("ok") == std::string::npos);
   rig.settle();
   CHECK(rig.steps().empty());
+}
+
+TEST_CASE("$N= changes the running front end: steps per mm, arc tolerance") {
+  Rig rig;
+  CHECK(rig.talk("$100=160\n") == "[MSG:$100 changed for this hmc grbl only: the profile file is not written]\r\nok\r\n");
+  CHECK(rig.talk("G0 X1\n") == "ok\r\n");
+  rig.settle();
+  CHECK(rig.steps()[1].first == 160);
+  CHECK(rig.talk("$$\n").find("$100=160.000\r\n") != std::string::npos);
+  CHECK(rig.talk("$12=0.5\n").find("ok\r\n") != std::string::npos);
+  CHECK(rig.front->interpreter().settings().arc_tolerance_mm == 0.5);
+  CHECK(rig.talk("$0=5\n").find("fixed by the board") != std::string::npos);
 }
 
 TEST_CASE("homing, soft limits and jogging") {
