@@ -2,7 +2,9 @@
 """How closely `hmc grbl` moves follow each other on the board, measured in the simulated board's
 trace in real time (sim://, not fast; 115200 baud paced both ways): for every two-axis segment,
 the start skew between its axes (when each STM line had arrived, and each motor's first STEP
-edge), and the pause from a segment's last STEP edge to the next one's first. Two programs: a
+edge), the pause from a segment's last STEP edge to the next one's first (which holds the last
+and first step intervals of the ramps), and the host's part of it: from the board sending the
+segment's last EVD to the next segment's first STM line having arrived. Two programs: a
 zig-zag whose segments keep the same axis shares (no SET lines between them) and an arc, whose
 chords change the shares (a SET of each motor's acceleration before its STM).
 Usage: grbl_segments.py HMC_BINARY"""
@@ -58,6 +60,8 @@ def measure(events):
     """Segments: the STM lines received together, and the steps until the next such burst."""
     segments = []
     for e in events:
+        if e.get("ev") == "tx" and "#EVD#" in e["line"] and segments:
+            segments[-1]["evd"] = e["t"]
         if e.get("ev") == "rx" and "#STM#" in e["line"]:
             motor = int(e["line"].split("#")[3])
             if not segments or segments[-1]["steps"]:
@@ -74,7 +78,8 @@ def measure(events):
     end_skew = [ms(max(s["last"].values()) - min(s["last"].values())) for s in segments if len(s["last"]) > 1]
     gaps = [ms(min(b["first"].values()) - max(a["last"].values())) for a, b in zip(segments, segments[1:])
             if a["last"] and b["first"]]
-    return rx_skew, step_skew, end_skew, gaps
+    turnaround = [ms(min(b["rx"].values()) - a["evd"]) for a, b in zip(segments, segments[1:]) if "evd" in a]
+    return rx_skew, step_skew, end_skew, gaps, turnaround
 
 
 def show(name, values):
@@ -86,10 +91,12 @@ zigzag = ["G21 G90 G1 F1500"] + ["G1 X%d Y%d" % (2 * (i + 1), 2 * ((i + 1) % 2))
 arc = ["G21 G90 G1 X10 Y0 F1500", "G3 X-10 Y0 I-10 J0"]
 figures = {}
 for name, program in (("zigzag", zigzag), ("arc", arc)):
-    rx_skew, step_skew, end_skew, gaps = measure(run(program, name))
+    rx_skew, step_skew, end_skew, gaps, turnaround = measure(run(program, name))
     print("%s: %d segments" % (name, len(gaps) + 1))
     figures[name] = (show("STM lines' arrival, first to last axis", rx_skew), show("first STEP edges, first to last axis", step_skew),
-                     show("last STEP edges, first to last axis", end_skew), show("pause: last STEP to the next segment's first", gaps))
+                     show("last STEP edges, first to last axis", end_skew), show("pause: last STEP to the next segment's first", gaps),
+                     show("host: last EVD sent to the next STM received", turnaround))
 print("summary: | hmc grbl: two-axis start skew (STM arrival) | %.2f ms | | | ≈ one STM line, 2.9 ms at 115200 |" % figures["zigzag"][0])
 print("summary: | hmc grbl: pause between segments, same shares | %.2f ms | | | |" % figures["zigzag"][3])
 print("summary: | hmc grbl: pause between arc chords (SET + STM) | %.2f ms | | | |" % figures["arc"][3])
+print("summary: | hmc grbl: last EVD sent to the next STM received | %.2f ms | | | |" % figures["zigzag"][4])
