@@ -2,6 +2,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <set>
 
 #include "hmc/gcode.h"
 
@@ -146,4 +147,42 @@ TEST_CASE("a jog's modes apply to the jog only") {
   GrblResult<std::vector<Step>> bad = run(j, "G1 X1 F10", true);
   REQUIRE_FALSE(bad.ok());
   CHECK(bad.error().code == kInvalidJog);
+}
+
+TEST_CASE("random lines: never a crash, grbl's numbers only, a refused line changes nothing") {
+  const std::string alphabet = "GMXYZFIJKLNPRSTUBWA0123456789.-+ ()$=;%\t\x01\x7f\x80\xff";
+  uint32_t seed = 12345;
+  const auto next = [&seed] {
+    seed = seed * 1103515245u + 12345u;
+    return (seed >> 16) & 0x7fffu;
+  };
+  const std::set<int> known = {1, 2, 4, 16, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 31, 32, 33, 34, 35, 36};
+  Interpreter in;
+  size_t accepted = 0;
+  for (int i = 0; i < 20000; ++i) {
+    std::string line;
+    const size_t length = next() % 24;
+    for (size_t k = 0; k < length; ++k) line.push_back(alphabet[next() % alphabet.size()]);
+    const CleanLine c = clean_line(line);
+    if (c.garbage) {
+      CHECK(c.garbage->code == kExpectedCommandLetter);
+      continue;
+    }
+    const Interpreter before = in;
+    GrblResult<std::vector<Step>> r = in.interpret(c.text, next() % 8 == 0);
+    if (r) {
+      ++accepted;
+      for (const Step& s : *r) {
+        if (const auto* m = std::get_if<Move>(&s)) {
+          for (double v : m->target) CHECK(std::isfinite(v));
+        }
+      }
+    } else {
+      INFO(line);
+      CHECK(known.count(r.error().code) == 1);
+      CHECK(in.position() == before.position());
+      CHECK(in.parser_state() == before.parser_state());
+    }
+  }
+  CHECK(accepted > 0);
 }

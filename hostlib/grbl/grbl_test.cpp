@@ -240,3 +240,34 @@ TEST_CASE("feed hold, resume, soft reset and a sender that goes away") {
   rig.front->connected();
   CHECK(rig.front->take_output().find("went away during a motion") != std::string::npos);
 }
+
+TEST_CASE("random lines: each gets exactly one ok or error, in order, and hmc grbl goes on") {
+  Rig rig;
+  const std::string alphabet = "GMFIJKLNRSTUBWA0123456789.-+ ()$=;%\t\x01\x7f\x80\xff";
+  uint32_t seed = 777;
+  const auto next = [&seed] {
+    seed = seed * 1103515245u + 12345u;
+    return (seed >> 16) & 0x7fffu;
+  };
+  std::string input;
+  const size_t lines = 400;
+  for (size_t i = 0; i < lines; ++i) {
+    const size_t length = next() % 30;
+    for (size_t k = 0; k < length; ++k) input.push_back(alphabet[next() % alphabet.size()]);
+    input.push_back('\n');
+  }
+  rig.front->receive(input);
+  std::string got;
+  const std::regex answer("(^|\n)(ok|error:\\d+)\r");
+  size_t answers = 0;
+  for (int i = 0; i < 20000 && answers < lines; ++i) {
+    if (i % 50 == 49) rig.front->receive("~");  // past any M0
+    REQUIRE(rig.front->service().ok());
+    got += rig.front->take_output();
+    answers = static_cast<size_t>(std::distance(std::sregex_iterator(got.begin(), got.end(), answer), std::sregex_iterator()));
+  }
+  CHECK(answers == lines);
+  CHECK(got.find("ALARM") == std::string::npos);
+  CHECK(rig.talk("$X\n").find("ok\r\n") != std::string::npos);
+  CHECK(rig.talk("G0 X1\n") == "ok\r\n");
+}
