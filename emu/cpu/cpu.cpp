@@ -24,6 +24,8 @@ constexpr uint32_t kRegions[][2] = {{0x40000000, 0x10000}, {0x41000000, 0x10000}
 // states). The return's cost is not in the manual: 13 cycles is a guess (the 8-word unstack).
 constexpr uint64_t kEntryCycles = 15, kReturnCycles = 13;
 constexpr uint32_t kExceptionExit = 8;  // Unicorn's interrupt number for an EXC_RETURN branch
+constexpr uint32_t kBreakpoint = 7;     // ... for BKPT
+constexpr uint32_t kIobusBase = 0x60000000;
 
 std::string hex(uint32_t v) {
   char text[16];
@@ -174,19 +176,65 @@ bool Cpu::reset(uint32_t vector_table, std::string& error) {
   return true;
 }
 
-// Each translated block is costed once; flash blocks by their start address in a flat table.
-uint32_t Cpu::block_cost(uint64_t address, uint32_t size) {
+// Each translated block is analysed once; flash blocks by their start address in a flat table.
+const Cpu::BlockCost& Cpu::block_cost(uint64_t address, uint32_t size) {
   BlockCost* cached = address < kFlashSize ? &flash_costs_[address / 2] : nullptr;
-  if (cached != nullptr && cached->size == size) return cached->cycles;
+  if (cached != nullptr && cached->size == size) return *cached;
+  if (flash_lines_.size() > (1u << 22)) {
+    // Blocks re-translated with other sizes left old line lists behind: start afresh.
+    for (BlockCost& c : flash_costs_) c = BlockCost{};
+    flash_lines_.clear();
+  }
   std::vector<uint8_t> code(size);
-  uint32_t cost = size / 2;
+  std::vector<uint32_t>& lines = cached != nullptr ? flash_lines_ : scratch_lines_;
+  if (cached == nullptr) lines.clear();
+  const uint32_t lines_at = static_cast<uint32_t>(lines.size());
+  ThumbBlock block;
   if (uc_mem_read(uc_, address, code.data(), size) == UC_ERR_OK) {
-    cost = thumb_block_cycles(code.data(), size);
+    block = analyse_thumb_block(code.data(), size, static_cast<uint32_t>(address), kFlashSize,
+                                &lines);
+  } else {
+    block.cycles = block.instructions = size / 2;
   }
-  if (cached != nullptr && size <= UINT16_MAX && cost <= UINT16_MAX) {
-    *cached = BlockCost{static_cast<uint16_t>(size), static_cast<uint16_t>(cost)};
+  BlockCost cost;
+  cost.size = static_cast<uint16_t>(size);
+  cost.cycles = static_cast<uint16_t>(block.cycles);
+  cost.instructions = static_cast<uint16_t>(block.instructions);
+  cost.lines = static_cast<uint16_t>(lines.size() - lines_at);
+  cost.lines_at = lines_at;
+  cost.ends_in_conditional_branch = block.ends_in_conditional_branch;
+  // Blocks are short (the engine ends a translation block within a page); a size beyond the
+  // table's fields would be analysed on each run.
+  if (cached != nullptr && size <= UINT16_MAX && block.cycles <= UINT16_MAX) {
+    *cached = cost;
+    return *cached;
   }
-  return cost;
+  scratch_cost_ = cost;
+  return scratch_cost_;
+}
+
+// Wait states of reading `lines` from flash through the NVM cache, as NVMCTRL CTRLB sets them
+// (SAMD21 datasheet, NVMCTRL "Cache"; the READMODE descriptions in Microchip's register
+// description): NO_MISS_PENALTY, the reset value, charges RWS on a miss and nothing on a hit;
+// LOW_POWER one wait state more on a miss; DETERMINISTIC, and the cache disabled, RWS on every
+// read.
+uint32_t Cpu::flash_waits(const uint32_t* lines, uint32_t count) {
+  const Nvmctrl& nvm = chip_.nvmctrl();
+  const uint32_t rws = nvm.read_wait_states();
+  const uint32_t mode = nvm.read_mode();
+  const bool every_read = nvm.cache_disabled() || mode == 2;
+  const uint32_t miss = rws + (mode == 1 ? 1 : 0);
+  uint32_t waits = 0;
+  for (uint32_t i = 0; i < count; ++i) {
+    uint32_t& tag = cache_tags_[lines[i] % 8];
+    if (tag != lines[i]) {
+      if (!nvm.cache_disabled()) tag = lines[i];
+      waits += miss;
+    } else if (every_read) {
+      waits += rws;
+    }
+  }
+  return waits;
 }
 
 void Cpu::on_block(uc_engine*, uint64_t address, uint32_t size, void* user) {
@@ -201,11 +249,30 @@ void Cpu::on_block(uc_engine*, uint64_t address, uint32_t size, void* user) {
   }
   // A stop requested here takes effect before the block runs: the block is charged only when
   // it runs.
-  if (chip.stopped() || chip.cycles() >= cpu.deadline_cycles_) {
+  if (chip.stopped() || cpu.exited_ || chip.cycles() >= cpu.deadline_cycles_) {
     uc_emu_stop(cpu.uc_);
     return;
   }
-  chip.charge_cycles(cpu.block_cost(address, size));
+  const BlockCost& cost = cpu.block_cost(address, size);
+  cpu.instructions_ += cost.instructions;
+  if (cpu.options_.cost == CostModel::kInstructions) {
+    chip.charge_cycles(cost.instructions);
+  } else {
+    uint64_t cycles = cost.cycles;
+    // DDI0484C table 3-1: a conditional branch not taken costs 1 cycle, taken 2.
+    if (cpu.previous_conditional_ && address == cpu.previous_end_) cycles -= 1;
+    if (cost.lines != 0) {
+      const uint32_t* lines =
+          (&cost == &cpu.scratch_cost_ ? cpu.scratch_lines_ : cpu.flash_lines_).data() +
+          cost.lines_at;
+      const uint32_t waits = cpu.flash_waits(lines, cost.lines);
+      cpu.flash_wait_cycles_ += waits;
+      cycles += waits;
+    }
+    chip.charge_cycles(cycles);
+  }
+  cpu.previous_end_ = address + size;
+  cpu.previous_conditional_ = cost.ends_in_conditional_branch;
   if (chip.take_irq_dirty()) {
     const bool primask = (cpu.reg(UC_ARM_REG_PRIMASK) & 1) != 0;
     if (chip.scs().ready_exception(primask) != 0) {
@@ -219,6 +286,9 @@ void Cpu::on_block(uc_engine*, uint64_t address, uint32_t size, void* user) {
 uint64_t Cpu::on_mmio_read(uc_engine*, uint64_t offset, unsigned size, void* user) {
   const MmioRegion& region = *static_cast<MmioRegion*>(user);
   Cpu& cpu = *region.cpu;
+  // DDI0484C, "Single-cycle I/O port": a load or store there takes one cycle, not the two the
+  // block was charged.
+  if (region.base == kIobusBase && cpu.options_.cost == CostModel::kCycles) cpu.chip_.refund_cycles(1);
   const uint32_t value = cpu.chip_.bus_read(region.base + static_cast<uint32_t>(offset), size);
   if (cpu.chip_.stopped()) uc_emu_stop(cpu.uc_);
   return value;
@@ -227,6 +297,7 @@ uint64_t Cpu::on_mmio_read(uc_engine*, uint64_t offset, unsigned size, void* use
 void Cpu::on_mmio_write(uc_engine*, uint64_t offset, unsigned size, uint64_t value, void* user) {
   const MmioRegion& region = *static_cast<MmioRegion*>(user);
   Cpu& cpu = *region.cpu;
+  if (region.base == kIobusBase && cpu.options_.cost == CostModel::kCycles) cpu.chip_.refund_cycles(1);
   cpu.chip_.bus_write(region.base + static_cast<uint32_t>(offset), static_cast<uint32_t>(value),
                       size);
   if (cpu.chip_.stopped()) uc_emu_stop(cpu.uc_);
@@ -252,6 +323,8 @@ void Cpu::on_interrupt(uc_engine*, uint32_t intno, void* user) {
   Cpu& cpu = *static_cast<Cpu*>(user);
   if (intno == kExceptionExit) {
     cpu.return_from_exception();
+  } else if (intno == kBreakpoint && cpu.options_.semihosting) {
+    cpu.semihost_call();
   } else if (cpu.options_.run_fault_handler) {
     cpu.enter_exception(Scs::kHardFault);
   } else {
@@ -259,6 +332,30 @@ void Cpu::on_interrupt(uc_engine*, uint32_t intno, void* user) {
                         std::to_string(intno) + ")");
   }
   uc_emu_stop(cpu.uc_);
+}
+
+// ARM semihosting (the "Semihosting for AArch32 and AArch64" specification): BKPT 0xAB with the
+// operation in R0 and its argument in R1. SYS_WRITE0 (0x04) writes a NUL-terminated string;
+// SYS_EXIT (0x18) ends the program, R1 = 0x20026 (ADP_Stopped_ApplicationExit) for success.
+void Cpu::semihost_call() {
+  const uint32_t pc = reg(UC_ARM_REG_PC) & ~1u;
+  uint16_t op = 0;
+  if (!read(pc, &op, 2) || op != 0xBEAB) {
+    chip_.violation("breakpoint (BKPT " + hex(op) + ") that is not a semihosting call");
+    return;
+  }
+  const uint32_t call = reg(UC_ARM_REG_R0), arg = reg(UC_ARM_REG_R1);
+  if (call == 0x04) {
+    char c = 0;
+    for (uint32_t at = arg; read(at, &c, 1) && c != 0; ++at) semihost_output_ += c;
+  } else if (call == 0x18) {
+    exited_ = true;
+    exit_ok_ = arg == 0x20026;
+  } else {
+    chip_.violation("semihosting call " + hex(call) + " is not modelled (SYS_WRITE0, SYS_EXIT are)");
+    return;
+  }
+  set_reg(UC_ARM_REG_PC, (pc + 2) | 1u);
 }
 
 // B1.5.6: push R0-R3, R12, LR, the return address and xPSR on the current (main) stack,
@@ -291,13 +388,22 @@ void Cpu::enter_exception(unsigned exception) {
                     hex(chip_.scs().vtor()) + " is not a Thumb address in flash: " + hex(vector));
     return;
   }
+  const uint64_t entered = chip_.cycles();
+  if (options_.cost == CostModel::kCycles) {
+    // The vector is read from flash (the NVM cache and its wait states, flash_waits).
+    const uint32_t line = (chip_.scs().vtor() + 4 * exception) / kFlashLineBytes;
+    const uint32_t waits = flash_waits(&line, 1);
+    flash_wait_cycles_ += waits;
+    chip_.charge_cycles(waits);
+  }
+  previous_conditional_ = false;
   set_reg(UC_ARM_REG_SP, sp);
   set_reg(UC_ARM_REG_LR, ipsr != 0 ? 0xFFFFFFF1u : 0xFFFFFFF9u);
   set_reg(UC_ARM_REG_IPSR, exception);
   set_reg(UC_ARM_REG_PC, vector);
   chip_.scs().acknowledge(exception);
-  chip_.charge_cycles(kEntryCycles);
-  active_.push_back(Active{exception, chip_.cycles()});
+  chip_.charge_cycles(options_.cost == CostModel::kCycles ? kEntryCycles : 0);
+  active_.push_back(Active{exception, entered});
 }
 
 // B1.5.8: unstack the frame from the main stack, undo the alignment word, back to the
@@ -316,13 +422,13 @@ void Cpu::return_from_exception() {
   }
   sp += 32;
   if ((frame[7] & (1u << 9)) != 0) sp += 4;
-  chip_.charge_cycles(kReturnCycles);
+  chip_.charge_cycles(options_.cost == CostModel::kCycles ? kReturnCycles : 0);
   if (!active_.empty()) {
     const Active done = active_.back();
     active_.pop_back();
     HandlerFigures& figures = handler_figures_[done.exception];
     ++figures.count;
-    figures.cycles += chip_.cycles() - done.entered_cycles + kEntryCycles;
+    figures.cycles += chip_.cycles() - done.entered_cycles;
     chip_.scs().complete(done.exception);
   }
   set_reg(UC_ARM_REG_R0, frame[0]);
@@ -348,17 +454,18 @@ void Cpu::set_deadline() {
 void Cpu::sync_active() {
   const unsigned ipsr = reg(UC_ARM_REG_IPSR) & 0x3F;
   while (!active_.empty() && active_.back().exception != ipsr) {
-      const Active done = active_.back();
+    const Active done = active_.back();
     active_.pop_back();
+    chip_.charge_cycles(options_.cost == CostModel::kCycles ? kReturnCycles : 0);
     HandlerFigures& figures = handler_figures_[done.exception];
     ++figures.count;
-    figures.cycles += chip_.cycles() - done.entered_cycles + kEntryCycles + kReturnCycles;
+    figures.cycles += chip_.cycles() - done.entered_cycles;
     chip_.scs().complete(done.exception);
   }
 }
 
 void Cpu::run_until(uint64_t until_ps) {
-  while (!chip_.stopped() && chip_.now_ps() < until_ps) {
+  while (!chip_.stopped() && !exited_ && chip_.now_ps() < until_ps) {
     sync_active();
     chip_.advance();
     if (chip_.stopped()) break;
