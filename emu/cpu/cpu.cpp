@@ -69,15 +69,24 @@ std::string Cpu::where(uint32_t address) const {
   return image_.function_at(address) + " (" + hex(address) + ")";
 }
 
+// RAM is the engine's memory mapped from ram_: the exception frames and the DMAC's transfers
+// reach it directly. (uc_mem_write looks for translated code to invalidate on every call,
+// allocating as it goes; no code runs from RAM here.)
 bool Cpu::read(uint32_t address, void* bytes, uint32_t count) {
-  const bool in_ram = address >= kRamBase && address - kRamBase + uint64_t{count} <= kRamSize;
+  if (address >= kRamBase && address - kRamBase + uint64_t{count} <= kRamSize) {
+    std::memcpy(bytes, ram_.data() + (address - kRamBase), count);
+    return true;
+  }
   const bool in_flash = address + uint64_t{count} <= kFlashSize;
-  return (in_ram || in_flash) && uc_mem_read(uc_, address, bytes, count) == UC_ERR_OK;
+  return in_flash && uc_mem_read(uc_, address, bytes, count) == UC_ERR_OK;
 }
 
 bool Cpu::write(uint32_t address, const void* bytes, uint32_t count) {
-  const bool in_ram = address >= kRamBase && address - kRamBase + uint64_t{count} <= kRamSize;
-  return in_ram && uc_mem_write(uc_, address, bytes, count) == UC_ERR_OK;
+  if (address >= kRamBase && address - kRamBase + uint64_t{count} <= kRamSize) {
+    std::memcpy(ram_.data() + (address - kRamBase), bytes, count);
+    return true;
+  }
+  return false;
 }
 
 bool Cpu::init(std::string& error) {
@@ -92,7 +101,7 @@ bool Cpu::init(std::string& error) {
   };
   map(kFlashBase, kFlashSize, UC_PROT_READ | UC_PROT_EXEC);
   map(kNvmRowsBase, kNvmRowsSize, UC_PROT_READ);
-  map(kRamBase, kRamSize, UC_PROT_ALL);
+  if (err == UC_ERR_OK) err = uc_mem_map_ptr(uc_, kRamBase, kRamSize, UC_PROT_ALL, ram_.data());
   if (err != UC_ERR_OK) {
     error = std::string("cannot map the chip's memory: ") + uc_strerror(err);
     return false;

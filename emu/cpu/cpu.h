@@ -123,6 +123,7 @@ class Cpu : public Memory {
   // line number held by each entry, UINT32_MAX: empty.
   uint32_t cache_tags_[8] = {UINT32_MAX, UINT32_MAX, UINT32_MAX, UINT32_MAX,
                              UINT32_MAX, UINT32_MAX, UINT32_MAX, UINT32_MAX};
+  std::vector<uint8_t> ram_ = std::vector<uint8_t>(32 * 1024);
   std::string semihost_output_;
   bool exited_ = false;
   bool exit_ok_ = false;
