@@ -340,9 +340,12 @@ int run(const Options& options) {
       const uint64_t spent = figures.cycles - before.cycles;
       if (count == 0) continue;
       std::fprintf(stderr, "hmc-emu: exception %u: %" PRIu64 " entries, %.1f cycles each, %" PRIu64
-                           " cycles (%.2f %% of the CPU)\n",
+                           " cycles (%.2f %% of the CPU), %" PRIu64 " instructions, %" PRIu64
+                           " flash wait cycles\n",
                    exception, count, static_cast<double>(spent) / static_cast<double>(count), spent,
-                   cycles != 0 ? 100.0 * static_cast<double>(spent) / static_cast<double>(cycles) : 0.0);
+                   cycles != 0 ? 100.0 * static_cast<double>(spent) / static_cast<double>(cycles) : 0.0,
+                   figures.instructions - before.instructions,
+                   figures.flash_wait_cycles - before.flash_wait_cycles);
     }
   }
   return code;

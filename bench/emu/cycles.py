@@ -49,7 +49,8 @@ def run(moves, accel=0):
         sys.exit("cycles: the image refused a frame: %s" % refused)
     window = re.search(r"measured from ([\d.]+) s to ([\d.]+) s: (\d+) cycles.*?(\d+) flash wait "
                        r"cycles; steps (\d+) (\d+) (\d+)", done.stderr)
-    step = re.search(r"exception 35: (\d+) entries, ([\d.]+) cycles each, (\d+) cycles", done.stderr)
+    step = re.search(r"exception 35: (\d+) entries, ([\d.]+) cycles each, (\d+) cycles .*?, "
+                     r"(\d+) instructions, (\d+) flash wait cycles", done.stderr)
     if not window or not step:
         sys.exit("cycles: no figures from hmc-emu:\n" + done.stderr)
     steps = sum(int(window.group(i)) for i in (5, 6, 7))
@@ -65,7 +66,8 @@ def run(moves, accel=0):
         "per_entry": float(step.group(2)),
         "per_step": int(step.group(3)) / steps,
         "share": 100.0 * int(step.group(3)) / int(window.group(3)),
-        "waits": int(window.group(4)),
+        "instructions": int(step.group(4)) / steps,
+        "isr_waits": int(step.group(5)) / steps,
     }
 
 
@@ -97,17 +99,17 @@ CASES = [
 print("Step interrupt of the real image (hmc-firmware.elf, real HAL) in hmc-emu's cycle model, "
       "from %.1f s to %.1f s of virtual time at 48 MHz:" % (MEASURE_FROM, MEASURE_TO))
 print()
-print("| case | steps/s | cycles per step | cycles per interrupt | CPU share | flash wait cycles "
-      "(whole CPU) | bench/qemu instructions per step (core, fake port) | Klipper cycles per step | "
-      "issue 18 target |")
-print("|---|---|---|---|---|---|---|---|---|")
+print("| case | steps/s | cycles per step | of which flash wait states | instructions per step | "
+      "cycles per interrupt | CPU share | bench/qemu instructions per step (core, fake port) | "
+      "Klipper cycles per step | issue 18 target |")
+print("|---|---|---|---|---|---|---|---|---|---|")
 results = []
 for name, moves, accel, qemu_row, klipper, target in CASES:
     r = run(moves, accel)
     results.append((name, r, klipper, target))
-    print("| %s | %.0f | %.1f | %.1f | %.1f %% | %d | %s | %d | <= %d |" % (
-        name, r["rate"], r["per_step"], r["per_entry"], r["share"], r["waits"],
-        qemu.get(qemu_row, "-"), klipper, target))
+    print("| %s | %.0f | %.1f | %.1f | %.1f | %.1f | %.1f %% | %s | %d | <= %d |" % (
+        name, r["rate"], r["per_step"], r["isr_waits"], r["instructions"], r["per_entry"],
+        r["share"], qemu.get(qemu_row, "-"), klipper, target))
 print()
 for name, r, klipper, target in results:
     print("summary: | firmware step interrupt on the real image (hmc-emu cycles), %s | %.0f cycles per "

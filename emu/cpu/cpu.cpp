@@ -398,11 +398,13 @@ void Cpu::enter_exception(unsigned exception) {
     return;
   }
   const uint64_t entered = chip_.cycles();
+  uint64_t entry_waits = 0;
   if (options_.cost == CostModel::kCycles) {
     // The vector is read from flash (the NVM cache and its wait states, flash_waits).
     const uint32_t line = (chip_.scs().vtor() + 4 * exception) / kFlashLineBytes;
     const uint32_t waits = flash_waits(&line, 1);
     flash_wait_cycles_ += waits;
+    entry_waits = waits;
     chip_.charge_cycles(waits);
   }
   previous_conditional_ = false;
@@ -412,7 +414,7 @@ void Cpu::enter_exception(unsigned exception) {
   set_reg(UC_ARM_REG_PC, vector);
   chip_.scs().acknowledge(exception);
   chip_.charge_cycles(options_.cost == CostModel::kCycles ? kEntryCycles : 0);
-  active_.push_back(Active{exception, entered});
+  active_.push_back(Active{exception, entered, instructions_, flash_wait_cycles_ - entry_waits});
 }
 
 // B1.5.8: unstack the frame from the main stack, undo the alignment word, back to the
@@ -435,10 +437,7 @@ void Cpu::return_from_exception() {
   if (!active_.empty()) {
     const Active done = active_.back();
     active_.pop_back();
-    HandlerFigures& figures = handler_figures_[done.exception];
-    ++figures.count;
-    figures.cycles += chip_.cycles() - done.entered_cycles;
-    chip_.scs().complete(done.exception);
+    account_return(done);
   }
   set_reg(UC_ARM_REG_R0, frame[0]);
   set_reg(UC_ARM_REG_R1, frame[1]);
@@ -457,6 +456,15 @@ void Cpu::set_deadline() {
   deadline_cycles_ = chip_.cycles_at(ps);
 }
 
+void Cpu::account_return(const Active& done) {
+  HandlerFigures& figures = handler_figures_[done.exception];
+  ++figures.count;
+  figures.cycles += chip_.cycles() - done.entered_cycles;
+  figures.instructions += instructions_ - done.entered_instructions;
+  figures.flash_wait_cycles += flash_wait_cycles_ - done.entered_waits;
+  chip_.scs().complete(done.exception);
+}
+
 // When the engine is stopped while an EXC_RETURN branch is in flight, it completes the return
 // itself at the next start (its own M-profile unstacking) without the interrupt hook: the
 // bookkeeping then follows IPSR, which names the exception still running (0: none).
@@ -466,10 +474,7 @@ void Cpu::sync_active() {
     const Active done = active_.back();
     active_.pop_back();
     chip_.charge_cycles(options_.cost == CostModel::kCycles ? kReturnCycles : 0);
-    HandlerFigures& figures = handler_figures_[done.exception];
-    ++figures.count;
-    figures.cycles += chip_.cycles() - done.entered_cycles;
-    chip_.scs().complete(done.exception);
+    account_return(done);
   }
 }
 

@@ -56,6 +56,8 @@ class Cpu : public Memory {
   struct HandlerFigures {
     uint64_t count = 0;
     uint64_t cycles = 0;
+    uint64_t instructions = 0;
+    uint64_t flash_wait_cycles = 0;  // of `cycles`
   };
   const std::map<unsigned, HandlerFigures>& handler_figures() const { return handler_figures_; }
 
@@ -130,7 +132,10 @@ class Cpu : public Memory {
   struct Active {
     unsigned exception;
     uint64_t entered_cycles;
+    uint64_t entered_instructions;
+    uint64_t entered_waits;
   };
+  void account_return(const Active& done);
   std::vector<Active> active_;
   std::map<unsigned, HandlerFigures> handler_figures_;
   std::vector<uc_hook> hooks_;
