@@ -228,22 +228,26 @@ const Cpu::BlockCost& Cpu::block_cost(uint64_t address, uint32_t size) {
 // LOW_POWER one wait state more on a miss; DETERMINISTIC, and the cache disabled, RWS on every
 // read.
 uint32_t Cpu::flash_waits(const uint32_t* lines, uint32_t count) {
-  const Nvmctrl& nvm = chip_.nvmctrl();
-  const uint32_t rws = nvm.read_wait_states();
-  const uint32_t mode = nvm.read_mode();
-  const bool every_read = nvm.cache_disabled() || mode == 2;
-  const uint32_t miss = rws + (mode == 1 ? 1 : 0);
   uint32_t waits = 0;
   for (uint32_t i = 0; i < count; ++i) {
     uint32_t& tag = cache_tags_[lines[i] % 8];
     if (tag != lines[i]) {
-      if (!nvm.cache_disabled()) tag = lines[i];
-      waits += miss;
-    } else if (every_read) {
-      waits += rws;
+      if (!nvm_.cache_off) tag = lines[i];
+      waits += nvm_.miss;
+    } else if (nvm_.every_read) {
+      waits += nvm_.rws;
     }
   }
   return waits;
+}
+
+// NVMCTRL CTRLB's read settings, taken at each chunk's start and after a write to NVMCTRL.
+void Cpu::read_nvm_settings() {
+  const Nvmctrl& nvm = chip_.nvmctrl();
+  nvm_.rws = nvm.read_wait_states();
+  nvm_.cache_off = nvm.cache_disabled();
+  nvm_.every_read = nvm_.cache_off || nvm.read_mode() == 2;
+  nvm_.miss = nvm_.rws + (nvm.read_mode() == 1 ? 1 : 0);
 }
 
 void Cpu::on_block(uc_engine*, uint64_t address, uint32_t size, void* user) {
@@ -307,8 +311,9 @@ void Cpu::on_mmio_write(uc_engine*, uint64_t offset, unsigned size, uint64_t val
   const MmioRegion& region = *static_cast<MmioRegion*>(user);
   Cpu& cpu = *region.cpu;
   if (region.base == kIobusBase && cpu.options_.cost == CostModel::kCycles) cpu.chip_.refund_cycles(1);
-  cpu.chip_.bus_write(region.base + static_cast<uint32_t>(offset), static_cast<uint32_t>(value),
-                      size);
+  const uint32_t address = region.base + static_cast<uint32_t>(offset);
+  cpu.chip_.bus_write(address, static_cast<uint32_t>(value), size);
+  if (address - Nvmctrl::kBase < 0x100) cpu.read_nvm_settings();  // CTRLB applies at once
   if (cpu.chip_.stopped()) uc_emu_stop(cpu.uc_);
 }
 
@@ -452,6 +457,7 @@ void Cpu::return_from_exception() {
 }
 
 void Cpu::set_deadline() {
+  read_nvm_settings();
   const uint64_t ps = chip_.next_event_ps() < until_ps_ ? chip_.next_event_ps() : until_ps_;
   deadline_cycles_ = chip_.cycles_at(ps);
 }

@@ -99,6 +99,7 @@ class Cpu : public Memory {
   };
   const BlockCost& block_cost(uint64_t address, uint32_t size);
   uint32_t flash_waits(const uint32_t* lines, uint32_t count);
+  void read_nvm_settings();
   void semihost_call();
 
   Chip& chip_;
@@ -125,6 +126,12 @@ class Cpu : public Memory {
   // line number held by each entry, UINT32_MAX: empty.
   uint32_t cache_tags_[8] = {UINT32_MAX, UINT32_MAX, UINT32_MAX, UINT32_MAX,
                              UINT32_MAX, UINT32_MAX, UINT32_MAX, UINT32_MAX};
+  struct NvmReadSettings {
+    uint32_t rws = 0;          // CTRLB.RWS
+    uint32_t miss = 0;         // wait states of a cache miss
+    bool every_read = false;   // DETERMINISTIC or the cache disabled: RWS on every read
+    bool cache_off = false;    // CTRLB.CACHEDIS
+  } nvm_;
   std::vector<uint8_t> ram_ = std::vector<uint8_t>(32 * 1024);
   std::string semihost_output_;
   bool exited_ = false;
