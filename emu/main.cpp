@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cinttypes>
+#include <fstream>
+#include <sstream>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -24,6 +26,7 @@
 #include "cpu/cpu.h"
 #include "elf/elf_image.h"
 #include "sim_io.h"
+#include "sim_script.h"
 
 namespace hmc::emu {
 namespace {
@@ -60,6 +63,7 @@ struct Options {
   std::string usb_pty;
   std::string uf2_drive;
   bool touch_to_enter = false;
+  std::string script;  // hmc-sim's script language (docs/sim.md, "Injected events")
 };
 
 // The bootloader's run before the first boot: the flash starts with the image's bytes (or erased
@@ -116,8 +120,9 @@ std::string format_seconds(uint64_t ps) {
 
 class Emulator {
  public:
-  Emulator(const Options& options, const ElfImage& image, sim::Link& link)
-      : options_(options), image_(image), link_(link) {}
+  Emulator(const Options& options, const ElfImage& image, sim::Link& link,
+           std::vector<sim::ScriptEvent> script)
+      : options_(options), image_(image), link_(link), script_(std::move(script)) {}
 
   bool power_on(uint8_t reset_cause, std::string& error) {
     ChipOptions chip_options;
@@ -159,7 +164,11 @@ class Emulator {
         if (target > now_ps() + 10 * kPsPerMs) target = now_ps() + 10 * kPsPerMs;
       }
       if (target > limit) target = limit;
+      if (!script_done() && event_ps(script_[next_event_]) < target) {
+        target = std::max(event_ps(script_[next_event_]), now_ps());
+      }
       if (target > now_ps()) machine_.cpu->run_until(target - time_offset_ps_);
+      if (apply_due_events()) quiet_since = now_ps();
       Chip& chip = *machine_.chip;
       Sercom& uart = chip.sercom(kUartSercom);
       if (const std::string out = uart.take_output(); !out.empty()) {
@@ -199,7 +208,7 @@ class Emulator {
       }
       // Standard input ended: finish once every byte is in and the answers have been quiet
       // for 200 ms of virtual time.
-      if (input_ended && held_.empty() && !uart.receiving() && !uart.transmitting() &&
+      if (input_ended && script_done() && held_.empty() && !uart.receiving() && !uart.transmitting() &&
           now_ps() - quiet_since > 200 * kPsPerMs) {
         return kExitOk;
       }
@@ -239,6 +248,39 @@ class Emulator {
   sim::PollSet poll_;
   bool booted_ = false;  // the board has sent its first line since power-on
   std::string held_;     // host bytes waiting for it
+  std::vector<sim::ScriptEvent> script_;
+  size_t next_event_ = 0;
+
+  bool script_done() const { return next_event_ == script_.size(); }
+  // Script times are hmc-sim's ticks (1/48 µs) since the first power-on.
+  static uint64_t event_ps(const sim::ScriptEvent& event) { return event.at * 1000000u / 48u; }
+  // The script's events due by now: a line onto the UART's wire, a switch pressed or released.
+  // True when any was applied (the run then waits for the board's answer before ending).
+  bool apply_due_events() {
+    Chip& chip = *machine_.chip;
+    const size_t first = next_event_;
+    while (!script_done() && event_ps(script_[next_event_]) <= now_ps()) {
+      const sim::SimCommand& c = script_[next_event_++].command;
+      switch (c.action) {
+        case sim::Action::kSend:
+          if (booted_) chip.sercom(kUartSercom).host_send(c.text + "\n");
+          else held_ += c.text + "\n";
+          break;
+        case sim::Action::kPress:
+        case sim::Action::kRelease:
+          chip.board().set_switch("limit" + std::to_string(c.motor) + (c.end == 0 ? "-" : "+"),
+                                  c.action == sim::Action::kPress);
+          break;
+        case sim::Action::kEstop:
+        case sim::Action::kEstopRelease:
+          chip.board().set_switch("emergency", c.action == sim::Action::kEstop);
+          break;
+        default:
+          break;  // refused when the script was loaded
+      }
+    }
+    return next_event_ != first;
+  }
 };
 
 int run(const Options& options) {
@@ -278,7 +320,33 @@ int run(const Options& options) {
     if (code >= 0) return code;
   }
 
-  Emulator emulator(options, image, **link.value);
+  std::vector<sim::ScriptEvent> script;
+  if (!options.script.empty()) {
+    std::ifstream in(options.script);
+    std::stringstream text;
+    text << in.rdbuf();
+    if (!in) {
+      std::cerr << "hmc-emu: cannot read script '" << options.script << "'\n";
+      return kExitIo;
+    }
+    sim::Result<std::vector<sim::ScriptEvent>> parsed = sim::parse_script(text.str());
+    if (!parsed) {
+      std::cerr << "hmc-emu: " << options.script << ":" << parsed.error << '\n';
+      return kExitUsage;
+    }
+    for (const sim::ScriptEvent& event : *parsed.value) {
+      const sim::Action a = event.command.action;
+      if (a != sim::Action::kSend && a != sim::Action::kPress && a != sim::Action::kRelease &&
+          a != sim::Action::kEstop && a != sim::Action::kEstopRelease) {
+        std::cerr << "hmc-emu: " << options.script << ":" << event.line
+                  << ": only send, press, release, estop and estop release are modelled\n";
+        return kExitUsage;
+      }
+    }
+    script = std::move(*parsed.value);
+  }
+
+  Emulator emulator(options, image, **link.value, std::move(script));
   if (!emulator.power_on(Pm::kCausePowerOn, error)) {
     std::cerr << "hmc-emu: " << error << '\n';
     return kExitImage;
@@ -337,6 +405,9 @@ int main(int argc, char** argv) {
                  "and booted");
   app.add_flag("--touch-to-enter", options.touch_to_enter,
                "with --usb-pty: the port starts as an application's and a 1200-baud touch enters the bootloader");
+  app.add_option("--script", options.script,
+                 "inject hmc-sim's script events (send, press, release, estop, estop release) at their "
+                 "virtual times since power-up (docs/sim.md, \"Injected events\")");
   app.add_flag("--stats", options.stats, "print virtual/wall time and cycles per handler at the end");
   try {
     app.parse(argc, argv);

@@ -118,17 +118,21 @@ def settle(board):
         pass
 
 
-def differences(path):
-    """The listed differences: reply name -> the field indices not compared."""
+def differences(path, scope="conformance"):
+    """The listed differences that apply to `scope` (conformance or behaviour)."""
     listed = json.loads(pathlib.Path(path).read_text(encoding="utf-8"))["differences"]
-    return {d["reply"]: set(d["masked_fields"]) for d in listed}
+    return [d for d in listed if d.get("scope", scope) == scope]
 
 
 def comparable(reply, masked):
+    """`reply` with the fields of every listed difference that applies to it replaced by '*'."""
     fields = reply.split("#")
-    if len(fields) > 3 and fields[2] in masked:
-        return "#".join("*" if i in masked[fields[2]] else f for i, f in enumerate(fields))
-    return reply
+    for d in masked:
+        when = d.get("when")
+        if len(fields) > 3 and fields[2] == d["reply"] and (
+                when is None or (len(fields) > when["field"] and fields[when["field"]] in when["in"])):
+            fields = ["*" if i in d["masked_fields"] else f for i, f in enumerate(fields)]
+    return "#".join(fields)
 
 
 def plays():
