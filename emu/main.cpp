@@ -26,6 +26,7 @@
 #include "cpu/cpu.h"
 #include "elf/elf_image.h"
 #include "sim_io.h"
+#include "sim_options.h"
 #include "sim_script.h"
 
 namespace hmc::emu {
@@ -64,6 +65,7 @@ struct Options {
   std::string uf2_drive;
   bool touch_to_enter = false;
   std::string script;  // hmc-sim's script language (docs/sim.md, "Injected events")
+  std::vector<std::string> axes;  // hmc-sim's --axis M:LOW:HIGH:START
 };
 
 // The bootloader's run before the first boot: the flash starts with the image's bytes (or erased
@@ -140,6 +142,10 @@ class Emulator {
     time_offset_ps_ += carried_ps;
     CpuOptions cpu_options;
     cpu_options.run_fault_handler = options_.run_fault_handler;
+    for (const std::string& text : options_.axes) {
+      const sim::AxisOption axis = *sim::parse_axis(text).value;  // checked by the option
+      machine_.chip->board().set_axis(axis.motor - 1u, axis.axis);
+    }
     machine_.cpu = std::make_unique<Cpu>(*machine_.chip, image_, cpu_options);
     if (!machine_.cpu->init(error)) return false;
     return machine_.cpu->reset(base, error);
@@ -408,6 +414,13 @@ int main(int argc, char** argv) {
   app.add_option("--script", options.script,
                  "inject hmc-sim's script events (send, press, release, estop, estop release) at their "
                  "virtual times since power-up (docs/sim.md, \"Injected events\")");
+  app.add_option("--axis", options.axes,
+                 "switch positions and start of motor 1 or 2's axis, in 1/256 step (repeatable; as hmc-sim's)")
+      ->type_name("M:LOW:HIGH:START")
+      ->check([](const std::string& text) {
+        const hmc::sim::Result<hmc::sim::AxisOption> axis = hmc::sim::parse_axis(text);
+        return axis ? std::string() : axis.error;
+      });
   app.add_flag("--stats", options.stats, "print virtual/wall time and cycles per handler at the end");
   try {
     app.parse(argc, argv);

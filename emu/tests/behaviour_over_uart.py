@@ -6,15 +6,19 @@ order, over the emulated UART.
 
 What differs from behaviour_test (the host-built core on the simulated board), and why:
   - The image always runs its power-up self-test; the vectors assume a board without it
-    (unless their board says "self_test": true). Those vectors start at kStart, after the
-    self-test has ended with every motor back at 0; the self-test's own lines come before.
+    (unless their board says "self_test": true). Those vectors start at START_MS, after the
+    self-test has ended with every motor back where it started, and after a VER whose answer
+    marks the start: of what came before, only the boot events (EVB, EVR) count as the
+    vector's; the self-test's own events (an axis starting on its switch leaves it and comes
+    back: two EVL) do not.
   - Only what the wire shows is checked: `replies` and `events`. Step counts, positions, axes,
     servo pulses, LED colours, tones and states are the emulated board's devices, not
     compared here (the replies and events carry the positions and states the firmware reports).
   - The image is built in normal mode: `legacy` and `seed` modes are not played.
-  - Vectors that change the simulated board (axes, accelerations), inject driver faults or put
-    a switch back to its axis position (`auto`) are skipped and listed: hmc-emu has no option for
-    them yet.
+  - A vector's axes become hmc-emu --axis options; its accelerations are set by SET lines
+    100 ms before it starts (their ACKs are set aside). Vectors that inject driver faults or
+    put a switch back to its axis position (`auto`) are skipped and listed: hmc-emu does not
+    model them yet.
   - The image receives at 115200 baud, as the sim with "baud" set; lines take their wire time,
     so the fields uart_differences.json lists (a running motor's STA position, target, rate)
     are not compared, as in conformance_over_uart.py.
@@ -32,15 +36,19 @@ from conformance_over_uart import comparable, differences
 
 START_MS = 1000  # the self-test ends before 900 ms of virtual time
 SETTLE_MS = 300  # after the last step, for the last replies and events
+LONGEST_MS = 5000  # longer vectors are not played: seconds of emulation each
 
 
 def playable(vector):
     """None, or why the vector cannot be played against the image."""
     if "normal" not in vector.get("modes", ["normal", "legacy"]):
         return "not in normal mode"
-    board = {k: v for k, v in vector.get("board", {}).items() if k not in ("baud", "self_test")}
+    board = {k: v for k, v in vector.get("board", {}).items()
+             if k not in ("baud", "self_test", "axes", "accel")}
     if board:
         return "changes the simulated board: " + ", ".join(sorted(board))
+    if max(step["at_ms"] for step in vector["script"]) > LONGEST_MS:
+        return f"longer than {LONGEST_MS} ms of virtual time (the CI share)"
     for step in vector["script"]:
         for key in step:
             if key not in ("at_ms", "send", "press", "release", "estop", "expect", "expect_legacy",
@@ -49,8 +57,51 @@ def playable(vector):
     return None
 
 
-def script(vector, start_ms):
+def board_options(vector):
+    """hmc-emu's --axis options for the vector's axes (hmc-sim's defaults for the rest)."""
+    options = []
+    for motor, axis in vector.get("board", {}).get("axes", {}).items():
+        low, high, start = axis.get("low", 0), axis.get("high", 409600), axis.get("start", 204800)
+        options += ["--axis", f"{motor}:{low}:{high}:{start}"]
+    return options
+
+
+def accel_lines(vector):
+    """SET lines giving the motors the vector's accelerations (setting 3), each answered ACK."""
     lines = []
+    for motor, accel in enumerate(vector.get("board", {}).get("accel", []), start=1):
+        if accel:
+            lines.append(f"STX#4#SET#{motor}#3#{accel}#{(motor + 3 + accel) % 256}#ETX")
+    return lines
+
+
+def boot_events(before):
+    """The events sent before the vector starts that a board without the self-test sends too:
+    all but the self-test's, which leaves a switch it starts on and comes back to it (a
+    release and a press of that switch, dropped in pairs)."""
+    events = [l for l in before if "#EV" in l]
+    kept = []
+    for line in events:
+        fields = line.split("#")
+        if fields[2] == "EVL" and fields[5] == "1":
+            release = "#".join(fields[:5] + ["0"])
+            match = next((i for i, k in enumerate(kept) if k.startswith(release + "#")), None)
+            if match is not None:
+                del kept[match]
+                continue
+        kept.append(line)
+    return kept
+
+
+MARK = "STX#1#VER#0#ETX"  # sent last before a vector starts: its answer ends the prelude
+
+
+def script(vector, start_ms):
+    # The accelerations are set just before the vector starts (the self-test is over), then a
+    # VER marks where the vector begins in what the board sends.
+    lines = [f"at {start_ms - 100}ms send {line}" for line in accel_lines(vector)]
+    if start_ms > 0:
+        lines.append(f"at {start_ms - 50}ms send {MARK}")
     for step in vector["script"]:
         at = f"at {round((start_ms + step['at_ms']) * 1000)}us"
         if "send" in step:
@@ -103,15 +154,28 @@ def main(directory, emu, image):
                 quiet_in, keep_open = os.pipe()
                 run = subprocess.run(
                     [emu, image, "--fast", "--quiet", "--script", str(script_path),
-                     "--max-time", str(end_ms / 1000)],
+                     "--max-time", str(end_ms / 1000)] + board_options(vector),
                     stdin=quiet_in, capture_output=True, timeout=300)
                 os.close(quiet_in)
                 os.close(keep_open)
                 played += 1
                 lines = run.stdout.decode("latin-1").splitlines()
-                got = {"events": [l for l in lines if l.split("#")[2:3] and l.split("#")[2].startswith("EV")]}
-                got["replies"] = [l for l in lines if l not in got["events"]]
                 problems = []
+                if start > 0:
+                    # Before the vector: the boot events (the vector expects them), the
+                    # self-test's own events (not the vector's), the SETs' ACKs and the VER.
+                    ver = next((i for i, l in enumerate(lines) if "#VER#" in l), None)
+                    if ver is None:
+                        problems.append("the VER before the vector was not answered")
+                        ver = len(lines) - 1
+                    before, lines = lines[:ver + 1], lines[ver + 1:]
+                    acks = [l for l in before if l == "STX#1#ACK#0#ETX"]
+                    if len(acks) != len(accel_lines(vector)):
+                        problems.append(f"the accelerations were not all taken: {before}")
+                    lines = boot_events(before) + lines
+                is_event = lambda l: l.split("#")[2:3] != [] and l.split("#")[2].startswith("EV")
+                got = {"events": [l for l in lines if is_event(l)],
+                       "replies": [l for l in lines if not is_event(l)]}
                 if run.returncode != 6:  # the end at --max-time
                     problems.append(f"hmc-emu exit {run.returncode}: {run.stderr.decode().strip()}")
                 for key in ("replies", "events"):
