@@ -9,8 +9,8 @@ What differs from behaviour_test (the host-built core on the simulated board), a
     (unless their board says "self_test": true). Those vectors start at START_MS, after the
     self-test has ended with every motor back where it started, and after a VER whose answer
     marks the start: of what came before, only the boot events (EVB, EVR) count as the
-    vector's; the self-test's own events (an axis starting on its switch leaves it and comes
-    back: two EVL) do not.
+    vector's; the self-test's own switch changes, which it undoes (an axis starting on a switch
+    leaves it and comes back, one near a switch runs onto it and back: two EVL), do not.
   - Only what the wire shows is checked: `replies` and `events`. Step counts, positions, axes,
     servo pulses, LED colours, tones and states are the emulated board's devices, not
     compared here (the replies and events carry the positions and states the firmware reports).
@@ -76,18 +76,18 @@ def accel_lines(vector):
 
 
 def boot_events(before):
-    """The events sent before the vector starts that a board without the self-test sends too:
-    all but the self-test's, which leaves a switch it starts on and comes back to it (a
-    release and a press of that switch, dropped in pairs)."""
-    events = [l for l in before if "#EV" in l]
+    """The events sent before the vector starts that a board without the self-test sends too.
+    The self-test leaves every axis where it started, so the switch changes it causes (leaving
+    a switch the axis starts on, or running onto one near its start) are undone before it ends:
+    a switch change followed by its undo is dropped, pair by pair, leaving each switch's net
+    change since power-up (the press reported at boot of a switch the axis starts on)."""
     kept = []
-    for line in events:
+    for line in (l for l in before if "#EV" in l):
         fields = line.split("#")
-        if fields[2] == "EVL" and fields[5] == "1":
-            release = "#".join(fields[:5] + ["0"])
-            match = next((i for i, k in enumerate(kept) if k.startswith(release + "#")), None)
-            if match is not None:
-                del kept[match]
+        if fields[2] == "EVL":
+            same = [i for i, k in enumerate(kept) if k.split("#")[2:5] == fields[2:5]]
+            if same and kept[same[-1]].split("#")[5] != fields[5]:
+                del kept[same[-1]]
                 continue
         kept.append(line)
     return kept
