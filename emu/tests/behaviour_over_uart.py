@@ -23,7 +23,7 @@ What differs from behaviour_test (the host-built core on the simulated board), a
     so the fields uart_differences.json lists (a running motor's STA position, target, rate)
     are not compared, as in conformance_over_uart.py.
 
-Usage: behaviour_over_uart.py VECTORS_DIR HMC_EMU IMAGE
+Usage: behaviour_over_uart.py VECTORS_DIR HMC_EMU IMAGE [ID...]   (IDs: only those vectors)
 """
 import json
 import os
@@ -128,7 +128,7 @@ def expected(vector, key):
     return lines, last_expect >= 0, last_expect >= last_action
 
 
-def main(directory, emu, image):
+def main(directory, emu, image, *only):
     if not os.path.isfile(image):
         if os.environ.get("CI") == "true":
             print(f"FAIL: no firmware image {image} (build the firmware preset first)")
@@ -140,6 +140,8 @@ def main(directory, emu, image):
     with tempfile.TemporaryDirectory() as work:
         for path in sorted(pathlib.Path(directory).glob("behaviour_*.json")):
             for vector in json.loads(path.read_text(encoding="utf-8"))["vectors"]:
+                if only and vector["id"] not in only:
+                    continue
                 why = playable(vector)
                 if why:
                     skipped.append(f"{vector['id']} ({why})")
@@ -198,6 +200,6 @@ def main(directory, emu, image):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 4:
+    if len(sys.argv) < 4:
         sys.exit(__doc__)
     sys.exit(main(*sys.argv[1:]))
