@@ -66,6 +66,7 @@ struct Options {
   bool touch_to_enter = false;
   std::string script;  // hmc-sim's script language (docs/sim.md, "Injected events")
   std::vector<std::string> axes;  // hmc-sim's --axis M:LOW:HIGH:START
+  double stall_at_s = 0;          // the CPU stops executing here (0: never), until a reset
 };
 
 // The bootloader's run before the first boot: the flash starts with the image's bytes (or erased
@@ -173,7 +174,21 @@ class Emulator {
       if (!script_done() && event_ps(script_[next_event_]) < target) {
         target = std::max(event_ps(script_[next_event_]), now_ps());
       }
-      if (target > now_ps()) machine_.cpu->run_until(target - time_offset_ps_);
+      if (options_.stall_at_s > 0 && !stall_done_ && now_ps() >= stall_at_ps()) {
+        stalled_ = stall_done_ = true;
+      }
+      if (!stalled_ && options_.stall_at_s > 0 && !stall_done_ && target > stall_at_ps()) {
+        target = std::max(stall_at_ps(), now_ps());
+      }
+      if (stalled_ && target > now_ps()) {
+        // A hung CPU: no instruction runs, no interrupt is taken; the clocks and the
+        // peripherals (the watchdog among them) go on.
+        Chip& chip = *machine_.chip;
+        chip.charge_cycles(chip.cycles_at(target - time_offset_ps_) - chip.cycles());
+        chip.advance();
+      } else if (target > now_ps()) {
+        machine_.cpu->run_until(target - time_offset_ps_);
+      }
       if (apply_due_events()) quiet_since = now_ps();
       Chip& chip = *machine_.chip;
       Sercom& uart = chip.sercom(kUartSercom);
@@ -200,6 +215,7 @@ class Emulator {
                     << std::hex << unsigned{cause} << std::dec << ")\n";
         }
         std::string error;
+        stalled_ = false;
         if (!power_on(cause, error)) {
           std::cerr << "hmc-emu: " << error << '\n';
           return kExitImage;
@@ -256,6 +272,9 @@ class Emulator {
   std::string held_;     // host bytes waiting for it
   std::vector<sim::ScriptEvent> script_;
   size_t next_event_ = 0;
+  bool stalled_ = false;     // --stall-at reached: the CPU executes nothing until a reset
+  bool stall_done_ = false;  // the stall happens once
+  uint64_t stall_at_ps() const { return static_cast<uint64_t>(options_.stall_at_s * 1e12); }
 
   bool script_done() const { return next_event_ == script_.size(); }
   // Script times are hmc-sim's ticks (1/48 µs) since the first power-on.
@@ -421,6 +440,10 @@ int main(int argc, char** argv) {
         const hmc::sim::Result<hmc::sim::AxisOption> axis = hmc::sim::parse_axis(text);
         return axis ? std::string() : axis.error;
       });
+  app.add_option("--stall-at", options.stall_at_s,
+                 "the CPU hangs at this virtual time (seconds): no instruction, no interrupt until a "
+                 "reset, as a stalled main loop looks to the watchdog")
+      ->check(CLI::PositiveNumber);
   app.add_flag("--stats", options.stats, "print virtual/wall time and cycles per handler at the end");
   try {
     app.parse(argc, argv);
