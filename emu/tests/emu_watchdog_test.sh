@@ -31,9 +31,10 @@ check() {
   fi
 }
 
-# Each run's script ends at 3 s; with standard input empty the run ends 200 ms after it.
-printf 'at 3s send STX#2#STA#8#8#ETX\n' >"$work/script"
-out=$(timeout 120 "$emu" "$image" --fast --quiet --watchdog-resets --stall-at 1.5 --max-time 10 \
+# Each run's script ends at 1.3 s, well past the stall plus the watchdog's period (the chip
+# resets about 0.5 s after the stall); with standard input empty the run ends 200 ms later.
+printf 'at 1300ms send STX#2#STA#8#8#ETX\n' >"$work/script"
+out=$(timeout 120 "$emu" "$image" --fast --quiet --watchdog-resets --stall-at 0.5 --max-time 10 \
         --script "$work/script" 2>"$work/err" </dev/null)
 check "stalled: exit 0" 0 $?
 check "stalled: booted twice, the second time reset by the watchdog (EVR and STR cause 4)" \
@@ -44,7 +45,7 @@ STX#6#EVR#4#0#0#0#0#4#ETX
 STX#6#STR#4#0#0#0#0#4#ETX" "$out"
 
 # Without --watchdog-resets the expiry stops the emulator as an error.
-timeout 120 "$emu" "$image" --fast --quiet --stall-at 1.5 --max-time 10 --script "$work/script" \
+timeout 120 "$emu" "$image" --fast --quiet --stall-at 0.5 --max-time 10 --script "$work/script" \
   >/dev/null 2>"$work/err" </dev/null
 check "stalled, no resets: exit 5" 5 $?
 check "stalled, no resets: the message" 1 "$(grep -c 'watchdog expired: the main loop stopped kicking it' "$work/err")"
