@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cinttypes>
+#include <fstream>
+#include <sstream>
 #include <cstdio>
 #include <iostream>
 #include <map>
@@ -25,6 +27,8 @@
 #include "cpu/cpu.h"
 #include "elf/elf_image.h"
 #include "sim_io.h"
+#include "sim_options.h"
+#include "sim_script.h"
 
 namespace hmc::emu {
 namespace {
@@ -62,6 +66,9 @@ struct Options {
   std::string usb_pty;
   std::string uf2_drive;
   bool touch_to_enter = false;
+  std::string script;  // hmc-sim's script language (docs/sim.md, "Injected events")
+  std::vector<std::string> axes;  // hmc-sim's --axis M:LOW:HIGH:START
+  double stall_at_s = 0;          // the CPU stops executing here (0: never), until a reset
 };
 
 // The bootloader's run before the first boot: the flash starts with the image's bytes (or erased
@@ -118,8 +125,9 @@ std::string format_seconds(uint64_t ps) {
 
 class Emulator {
  public:
-  Emulator(const Options& options, const ElfImage& image, sim::Link& link)
-      : options_(options), image_(image), link_(link) {}
+  Emulator(const Options& options, const ElfImage& image, sim::Link& link,
+           std::vector<sim::ScriptEvent> script)
+      : options_(options), image_(image), link_(link), script_(std::move(script)) {}
 
   bool power_on(uint8_t reset_cause, std::string& error) {
     ChipOptions chip_options;
@@ -137,6 +145,10 @@ class Emulator {
     time_offset_ps_ += carried_ps;
     CpuOptions cpu_options;
     cpu_options.run_fault_handler = options_.run_fault_handler;
+    for (const std::string& text : options_.axes) {
+      const sim::AxisOption axis = *sim::parse_axis(text).value;  // checked by the option
+      machine_.chip->board().set_axis(axis.motor - 1u, axis.axis);
+    }
     machine_.cpu = std::make_unique<Cpu>(*machine_.chip, image_, cpu_options);
     if (!machine_.cpu->init(error)) return false;
     return machine_.cpu->reset(base, error);
@@ -182,11 +194,29 @@ class Emulator {
         if (target > now_ps() + 10 * kPsPerMs) target = now_ps() + 10 * kPsPerMs;
       }
       if (target > limit) target = limit;
-      if (target > now_ps()) machine_.cpu->run_until(target - time_offset_ps_);
+      if (!script_done() && event_ps(script_[next_event_]) < target) {
+        target = std::max(event_ps(script_[next_event_]), now_ps());
+      }
+      if (options_.stall_at_s > 0 && !stall_done_ && now_ps() >= stall_at_ps()) {
+        stalled_ = stall_done_ = true;
+      }
+      if (!stalled_ && options_.stall_at_s > 0 && !stall_done_ && target > stall_at_ps()) {
+        target = std::max(stall_at_ps(), now_ps());
+      }
+      if (stalled_ && target > now_ps()) {
+        // A hung CPU: no instruction runs, no interrupt is taken; the clocks and the
+        // peripherals (the watchdog among them) go on.
+        Chip& chip = *machine_.chip;
+        chip.charge_cycles(chip.cycles_at(target - time_offset_ps_) - chip.cycles());
+        chip.advance();
+      } else if (target > now_ps()) {
+        machine_.cpu->run_until(target - time_offset_ps_);
+      }
       if (!measuring_ && now_ps() >= static_cast<uint64_t>(options_.measure_from_s * 1e12)) {
         measuring_ = true;
         measure_start_ = snapshot();
       }
+      if (apply_due_events()) quiet_since = now_ps();
       Chip& chip = *machine_.chip;
       Sercom& uart = chip.sercom(kUartSercom);
       if (const std::string out = uart.take_output(); !out.empty()) {
@@ -212,6 +242,7 @@ class Emulator {
                     << std::hex << unsigned{cause} << std::dec << ")\n";
         }
         std::string error;
+        stalled_ = false;
         if (!power_on(cause, error)) {
           std::cerr << "hmc-emu: " << error << '\n';
           return kExitImage;
@@ -226,7 +257,7 @@ class Emulator {
       }
       // Standard input ended: finish once every byte is in and the answers have been quiet
       // for 200 ms of virtual time.
-      if (input_ended && held_.empty() && !uart.receiving() && !uart.transmitting() &&
+      if (input_ended && script_done() && held_.empty() && !uart.receiving() && !uart.transmitting() &&
           now_ps() - quiet_since > 200 * kPsPerMs) {
         return kExitOk;
       }
@@ -268,6 +299,42 @@ class Emulator {
   bool measuring_ = false;
   Snapshot measure_start_;
   std::string held_;     // host bytes waiting for it
+  std::vector<sim::ScriptEvent> script_;
+  size_t next_event_ = 0;
+  bool stalled_ = false;     // --stall-at reached: the CPU executes nothing until a reset
+  bool stall_done_ = false;  // the stall happens once
+  uint64_t stall_at_ps() const { return static_cast<uint64_t>(options_.stall_at_s * 1e12); }
+
+  bool script_done() const { return next_event_ == script_.size(); }
+  // Script times are hmc-sim's ticks (1/48 µs) since the first power-on.
+  static uint64_t event_ps(const sim::ScriptEvent& event) { return event.at * 1000000u / 48u; }
+  // The script's events due by now: a line onto the UART's wire, a switch pressed or released.
+  // True when any was applied (the run then waits for the board's answer before ending).
+  bool apply_due_events() {
+    Chip& chip = *machine_.chip;
+    const size_t first = next_event_;
+    while (!script_done() && event_ps(script_[next_event_]) <= now_ps()) {
+      const sim::SimCommand& c = script_[next_event_++].command;
+      switch (c.action) {
+        case sim::Action::kSend:
+          if (booted_) chip.sercom(kUartSercom).host_send(c.text + "\n");
+          else held_ += c.text + "\n";
+          break;
+        case sim::Action::kPress:
+        case sim::Action::kRelease:
+          chip.board().set_switch("limit" + std::to_string(c.motor) + (c.end == 0 ? "-" : "+"),
+                                  c.action == sim::Action::kPress);
+          break;
+        case sim::Action::kEstop:
+        case sim::Action::kEstopRelease:
+          chip.board().set_switch("emergency", c.action == sim::Action::kEstop);
+          break;
+        default:
+          break;  // refused when the script was loaded
+      }
+    }
+    return next_event_ != first;
+  }
 };
 
 int run(const Options& options) {
@@ -307,7 +374,33 @@ int run(const Options& options) {
     if (code >= 0) return code;
   }
 
-  Emulator emulator(options, image, **link.value);
+  std::vector<sim::ScriptEvent> script;
+  if (!options.script.empty()) {
+    std::ifstream in(options.script);
+    std::stringstream text;
+    text << in.rdbuf();
+    if (!in) {
+      std::cerr << "hmc-emu: cannot read script '" << options.script << "'\n";
+      return kExitIo;
+    }
+    sim::Result<std::vector<sim::ScriptEvent>> parsed = sim::parse_script(text.str());
+    if (!parsed) {
+      std::cerr << "hmc-emu: " << options.script << ":" << parsed.error << '\n';
+      return kExitUsage;
+    }
+    for (const sim::ScriptEvent& event : *parsed.value) {
+      const sim::Action a = event.command.action;
+      if (a != sim::Action::kSend && a != sim::Action::kPress && a != sim::Action::kRelease &&
+          a != sim::Action::kEstop && a != sim::Action::kEstopRelease) {
+        std::cerr << "hmc-emu: " << options.script << ":" << event.line
+                  << ": only send, press, release, estop and estop release are modelled\n";
+        return kExitUsage;
+      }
+    }
+    script = std::move(*parsed.value);
+  }
+
+  Emulator emulator(options, image, **link.value, std::move(script));
   if (!emulator.power_on(Pm::kCausePowerOn, error)) {
     std::cerr << "hmc-emu: " << error << '\n';
     return kExitImage;
@@ -385,6 +478,20 @@ int main(int argc, char** argv) {
                  "and booted");
   app.add_flag("--touch-to-enter", options.touch_to_enter,
                "with --usb-pty: the port starts as an application's and a 1200-baud touch enters the bootloader");
+  app.add_option("--script", options.script,
+                 "inject hmc-sim's script events (send, press, release, estop, estop release) at their "
+                 "virtual times since power-up (docs/sim.md, \"Injected events\")");
+  app.add_option("--axis", options.axes,
+                 "switch positions and start of motor 1 or 2's axis, in 1/256 step (repeatable; as hmc-sim's)")
+      ->type_name("M:LOW:HIGH:START")
+      ->check([](const std::string& text) {
+        const hmc::sim::Result<hmc::sim::AxisOption> axis = hmc::sim::parse_axis(text);
+        return axis ? std::string() : axis.error;
+      });
+  app.add_option("--stall-at", options.stall_at_s,
+                 "the CPU hangs at this virtual time (seconds): no instruction, no interrupt until a "
+                 "reset, as a stalled main loop looks to the watchdog")
+      ->check(CLI::PositiveNumber);
   app.add_flag("--stats", options.stats, "print virtual/wall time and cycles per handler at the end");
   app.add_option("--measure-from", options.measure_from_s,
                  "--stats counts cycles, handler entries and STEP edges from this virtual time (seconds) on")

@@ -24,13 +24,16 @@ constexpr std::array<uint16_t, 8> kDrvReset = {0xC10, 0x1FF, 0x030, 0x080,
 
 }  // namespace
 
-// The axes are hmc-sim's (sim_board.h, SimConfig): motors 1-2 start mid-travel with limit
-// switches at both ends; motor 3 has none.
-const std::array<sim::AxisConfig, 3> kAxes = sim::SimConfig{}.axes;
 
 Board::Board(Chip& chip) : chip_(chip) {
   for (Drv8711& d : drivers_) d.regs = kDrvReset;
-  for (unsigned m = 0; m < 3; ++m) axes_[m].position = kAxes[m].start;
+  for (unsigned m = 0; m < 3; ++m) axes_[m].position = config_[m].start;
+}
+
+void Board::set_axis(unsigned motor, const sim::AxisConfig& config) {
+  config_[motor] = config;
+  axes_[motor].position = config.start;
+  update_limits(motor);
 }
 
 void Board::drive_switch(unsigned motor, unsigned end, bool pressed) {
@@ -41,9 +44,9 @@ void Board::drive_switch(unsigned motor, unsigned end, bool pressed) {
 }
 
 void Board::update_limits(unsigned motor) {
-  if (!kAxes[motor].has_switches) return;
-  drive_switch(motor, 0, axes_[motor].position <= kAxes[motor].low_switch);
-  drive_switch(motor, 1, axes_[motor].position >= kAxes[motor].high_switch);
+  if (!config_[motor].has_switches) return;
+  drive_switch(motor, 0, axes_[motor].position <= config_[motor].low_switch);
+  drive_switch(motor, 1, axes_[motor].position >= config_[motor].high_switch);
 }
 
 void Board::outputs_changed(unsigned group, uint32_t before, uint32_t after) {

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "sim_board.h"
+
 namespace hmc::emu {
 
 class Chip;
@@ -33,6 +35,9 @@ class Board {
   // One byte out of SERCOM `sercom`'s SPI master; returns the byte on MISO.
   uint8_t spi_exchange(unsigned sercom, uint8_t mosi);
   void servos_changed() {}
+  // Motor `motor`'s (0..2) axis: its start and switch positions (hmc-sim's --axis); the axis
+  // moves to its start. Default: hmc-sim's (sim::SimConfig).
+  void set_axis(unsigned motor, const sim::AxisConfig& config);
   // Switches by name: "limit1-", "limit1+", "limit2-", "limit2+", "emergency".
   bool set_switch(const std::string& name, bool pressed);
 
@@ -46,6 +51,7 @@ class Board {
   void drive_switch(unsigned motor, unsigned end, bool pressed);
 
   Chip& chip_;
+  std::array<sim::AxisConfig, 3> config_ = sim::SimConfig{}.axes;
   std::array<Axis, 3> axes_{};
   std::array<Drv8711, 3> drivers_{};
   std::array<std::vector<uint8_t>, 2> strip_bytes_{};

@@ -497,8 +497,9 @@ void Cpu::run_until(uint64_t until_ps) {
     until_ps_ = until_ps;
     set_deadline();
     chip_.take_irq_dirty();
-    // An exception held back by PRIMASK is looked for again at every block until CPSIE lets
-    // it in (without this it waited for the chunk's deadline, the next peripheral event).
+    // An interrupt held back only by PRIMASK is taken as soon as CPSIE/MSR clears it (B1.5.4):
+    // keep looking at every block until then. Without this a pending level (a UART byte)
+    // waited for the next peripheral event, and three such waits lost a received byte.
     if (primask && chip_.scs().ready_exception(false) != 0) chip_.irq_changed();
     ++chunks_;
     const uc_err err = uc_emu_start(uc_, pc() | 1u, 0xFFFFFFFFu, 0, 0);

@@ -226,6 +226,11 @@ void Controller::check_motions() {
     if (finished == mo.seen_finished) continue;
     mo.seen_finished = finished;
     if (scheduler_.is_running(motor)) continue;  // an earlier motion; the one running is newer
+    // A switch's interrupt halts at once and its event (EVE, EVL) is sent by check_switches():
+    // when the interrupt came after this poll's check_switches(), report the switch now, so
+    // its event always comes before the end it caused.
+    const uint8_t cause = mo.halt_cause;
+    if (cause == proto::kEndEmergency || cause == proto::kEndLimit) check_switches();
     motion_ended(motor);
   }
   advance_self_test();

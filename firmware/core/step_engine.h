@@ -197,6 +197,7 @@ inline void advance(StepEngine& e, StepLane& lane) {
 template <class Port>
 void run_step_interrupt(StepEngine& e, Port& port, uint32_t now) {
   using namespace step_engine_detail;
+  const uint32_t entry = now;
   if (load8(e.pending) != 0) {
     store8(e.pending, 0);
     take_requests(e);
@@ -237,14 +238,18 @@ void run_step_interrupt(StepEngine& e, Port& port, uint32_t now) {
     }
     if (steps != 0) port.step_low(steps, since);
     if (best == 0x7FFFFFFF) return;  // nothing armed
-    // Time has passed since entry (the pulses above, at least): compare what is left.
-    if (best - static_cast<int32_t>(port.elapsed()) >= static_cast<int32_t>(Port::kCostTicks)) {
+    // Time has passed since entry (the pulses above, at least): compare what is left. Both
+    // the port's clock and its waits count from the entry, not from `now`, which moves on
+    // with each pass: measured from `now`, a second pass found every event already due and
+    // stepped the ring empty as fast as the CPU ran.
+    const int32_t after_entry = static_cast<int32_t>(when - entry);
+    if (after_entry - static_cast<int32_t>(port.elapsed()) >= static_cast<int32_t>(Port::kCostTicks)) {
       port.arm(when);
       return;
     }
     // Due before the interrupt could return and come back: wait for it here.
     if (best > 0) {
-      port.wait_for(static_cast<uint32_t>(best));
+      if (after_entry > 0) port.wait_for(static_cast<uint32_t>(after_entry));
       now = when;
     }
   }

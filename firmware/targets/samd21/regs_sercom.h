@@ -45,6 +45,7 @@ inline constexpr uint32_t kIntRxc = 1u << 2;
 
 // STATUS (write 1 to clear): PERR 0, FERR 1, BUFOVF 2.
 inline constexpr uint32_t kStatusErrors = 0x7;
+inline constexpr uint32_t kStatusBufOvf = 1u << 2;
 
 // SYNCBUSY.
 inline constexpr uint32_t kSyncSwRst = 1u << 0;

@@ -18,6 +18,11 @@ constexpr uint32_t kBase = sercom::base(board::uart::kSercom);
 constexpr uint32_t kSize = SerialPort::kRingSize;
 constexpr uint32_t kMask = kSize - 1;
 
+// Stands in the received stream where bytes were lost or damaged: NUL is a bad byte anywhere
+// in a line (docs/protocol.md, "Link"), so the line that lost them is refused, never
+// parsed spliced from what is left.
+constexpr uint8_t kLostMarker = 0;
+
 uint8_t rx_ring[kSize];
 uint8_t tx_ring[kSize];
 
@@ -77,13 +82,28 @@ void SerialPort::on_interrupt() {
       rx_errors_ = rx_errors_ + 1u;
     }
     const uint8_t byte = static_cast<uint8_t>(r16(kBase + sercom::kData));  // clears RXC
-    const uint32_t head = rx_head_;
-    if (head - rx_tail_ < kSize) {
-      rx_ring[head & kMask] = byte;
-      rx_head_ = head + 1;
+    // BUFOVF: bytes before this one were lost in the USART; FERR/PERR: this one is damaged;
+    // a full ring: this one is dropped. Data takes a place only while another stays free, so
+    // the marker of a loss always fits, right where the loss is.
+    uint32_t head = rx_head_;
+    uint32_t free = kSize - (head - rx_tail_);
+    const auto mark_loss = [&] {
+      if (rx_marked_) return;  // the marker stored last already stands for this loss
+      rx_ring[head++ & kMask] = kLostMarker;
+      --free;
+      rx_marked_ = true;
+    };
+    if ((status & sercom::kStatusBufOvf) != 0) mark_loss();
+    if ((status & ~sercom::kStatusBufOvf) != 0) {
+      mark_loss();
+    } else if (free >= 2) {
+      rx_ring[head++ & kMask] = byte;
+      rx_marked_ = false;
     } else {
       rx_dropped_ = rx_dropped_ + 1u;
+      mark_loss();
     }
+    rx_head_ = head;
   }
   if ((flags & sercom::kIntDre) != 0 && (r8(kBase + sercom::kIntEnSet) & sercom::kIntDre) != 0) {
     const uint32_t tail = tx_tail_;

@@ -1,7 +1,10 @@
 // SerialPort on the SAMD21: the command line on SERCOM5 (board.h: PB22 TX, PB23 RX, 115200 8N1,
 // to the FT232RL). Both directions are interrupt driven through ring buffers:
 //  - receive: the interrupt moves each byte into a 256-byte ring; read_byte() takes from it.
-//    A byte arriving with the ring full is dropped and counted (rx_dropped()).
+//    A byte arriving with the ring full is dropped and counted (rx_dropped()); so are bytes
+//    the USART itself lost (BUFOVF) or received damaged (FERR). Either way one NUL takes their
+//    place in the ring (the ring keeps a place free for it), so the line that lost them is
+//    refused as bad_byte where they were.
 //  - transmit: write() copies into a 256-byte ring and enables the data-register-empty
 //    interrupt, which sends. write() waits only when the ring is full (a reply is far shorter).
 // One producer and one consumer per ring, so no locking: the index each side writes is its own.
@@ -37,6 +40,7 @@ class SerialPort final : public hal::SerialPort {
   volatile uint32_t tx_tail_ = 0;  // written by the interrupt
   volatile uint32_t rx_dropped_ = 0;
   volatile uint32_t rx_errors_ = 0;
+  bool rx_marked_ = false;  // the interrupt's only: the last byte stored marks a loss
 };
 
 }  // namespace hmc::samd21
