@@ -166,10 +166,16 @@ Board::~Board() {
 
 void Board::close() {
   if (session_ == nullptr) return;
+  // The port closes even when stopping fails (a lost link): the error is raised after.
+  struct Closing {
+    Board& board;
+    ~Closing() {
+      py::gil_scoped_release release;
+      std::lock_guard<std::mutex> lock(board.mutex_);
+      board.session_.reset();  // disarms the link watchdog, saves a simulated board's state
+    }
+  } closing{*this};
   stop_started(true);
-  py::gil_scoped_release release;
-  std::lock_guard<std::mutex> lock(mutex_);
-  session_.reset();  // disarms the link watchdog, saves a simulated board's state
 }
 
 void Board::stop_started(bool python_allowed) {

@@ -142,6 +142,18 @@ def test_leaving_the_block_stops_what_it_started(sim_url):
         b.stop()
 
 
+def test_a_board_collected_without_close_stops_what_it_started(sim_url):
+    import gc
+
+    url = sim_url()
+    b = hmc.open(url)
+    b.run(3, 1000)
+    del b
+    gc.collect()
+    with hmc.open(url.split("?")[0] + "?fast") as again:
+        assert again.status().motors[2].state == "idle"
+
+
 def test_a_move_that_ends_early(sim_url):
     with hmc.open(sim_url()) as b:
         # Motor 1 starts mid-travel, 12800 steps (at 1/16) from its reverse switch.

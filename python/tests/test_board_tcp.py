@@ -75,6 +75,7 @@ def test_a_lost_link_during_a_wait(sim_server):
         with pytest.raises(hmc.LinkLost) as lost:
             b.wait(3)
         assert isinstance(lost.value, ConnectionError)
+    assert b.closed
 
 
 def test_a_silent_port_is_no_reply():
