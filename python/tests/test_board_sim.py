@@ -172,6 +172,8 @@ def test_home_all_and_home_without_a_switch(sim_url):
         b.home()
         s = b.status()
         assert s.motors[0].homed and s.motors[1].homed and not s.motors[2].homed
+        homed = [(e.motor, e.homed, e.position) for e in b.events(timeout=0) if e.kind == "homed"]
+        assert homed == [(1, True, 0), (2, True, 0)]
         with pytest.raises(hmc.Refused) as refused:
             b.home(3)
         assert refused.value.reason == "no_switch"

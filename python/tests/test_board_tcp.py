@@ -97,3 +97,16 @@ def test_a_closed_port_is_a_port_error():
     listener.close()
     with pytest.raises(hmc.PortError):
         hmc.open(f"tcp://127.0.0.1:{port}")
+
+
+def test_the_link_watchdog_event(sim_server):
+    """A watchdog armed behind the library's back (no keep-alive) fires: an event and a status."""
+    server = sim_server()
+    with hmc.open(server.url, watchdog=0) as b:
+        b.run(3, 1000)
+        b.send("WDG 100")
+        time.sleep(0.4)
+        fired = [e for e in b.events(timeout=0.5) if e.kind == "watchdog"]
+        assert fired and fired[0].motor == 3 and fired[0].how == "watchdog"
+        s = b.status()
+        assert s.watchdog_fired and s.motors[2].state == "idle"
