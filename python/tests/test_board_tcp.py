@@ -42,11 +42,17 @@ def test_no_watchdog_when_asked(sim_server):
 def test_the_emergency_switch_ends_a_move_early(sim_server):
     server = sim_server()
     with hmc.open(server.url) as b:
-        timer = threading.Timer(0.3, server.control, args=("estop",))
-        timer.start()
+        def press_once_moving():
+            deadline = time.monotonic() + 20
+            while motor_state(server, 3) != "moving" and time.monotonic() < deadline:
+                time.sleep(0.02)
+            server.control("estop")
+
+        presser = threading.Thread(target=press_once_moving)
+        presser.start()
         with pytest.raises(hmc.MotionEndedEarly) as early:
             b.move(3, steps=100000, speed=2000)
-        timer.join()
+        presser.join()
         assert early.value.how == "emergency" and early.value.motor == 3
         assert 0 < early.value.position < 100000
         with pytest.raises(hmc.Refused) as refused:
