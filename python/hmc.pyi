@@ -7,6 +7,8 @@ QuantityLike = Union["Quantity", str, int, float]
 AxisLike = Union[int, str]
 Colour = Union[str, Tuple[int, int, int], Tuple[int, int, int, int], Sequence[int]]
 
+__version__: str
+
 class Error(Exception): ...
 
 class Refused(Error):

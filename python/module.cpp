@@ -172,6 +172,7 @@ void define_module(py::module_& m) {
   m.doc() =
       "The Hybrid Motor Controller from Python: boards (real, over TCP, or simulated with sim://), moves in the "
       "machine profile's units, status, events, motion files, and the protocol's codec. docs/python.md.";
+  m.attr("__version__") = HMC_VERSION;
   make_exceptions(m);
 
   // ---- quantities -----------------------------------------------------------------------

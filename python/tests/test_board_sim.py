@@ -18,6 +18,7 @@ def test_board_properties(sim_url):
     with hmc.open(sim_url()) as b:
         assert b.description.startswith("simulated board sim://")
         assert b.firmware == "0.1.0" and b.protocol >= 6
+        assert hmc.__version__.count(".") == 2
         assert b.simulated and not b.watchdog_armed and not b.closed
         assert b.axes == []
         assert "hmc.Board" in repr(b)
