@@ -2,8 +2,10 @@
 // units, the codec's encode/decode with its diagnostics, motion files checked and planned.
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <initializer_list>
 
 #include "board.h"
@@ -148,7 +150,8 @@ FrameRecord decode_line(const std::string& line, bool board, bool crc) {
   return command_record(*decoded, mode);
 }
 
-PlanRecord plan_file(const std::string& path, const std::string& firmware, uint32_t baud) {
+PlanRecord plan_file(const std::filesystem::path& file_path, const std::string& firmware, uint32_t baud) {
+  const std::string path = file_path.string();
   if (firmware != "v2" && firmware != "seed") raise(exceptions().invalid_command, "firmware is 'v2' or 'seed', not '" + firmware + "'");
   Result<motion::MotionFile, std::vector<motion::FileError>> file = motion::load_motion_file(path);
   if (!file) raise_motion_file_error(file.error());
@@ -329,7 +332,7 @@ void define_module(py::module_& m) {
         "Judges one line as the board does and returns a Frame; board=True reads a frame the board sends (ACK, NAK, "
         "STA, EVD, ...). Raises FrameError naming the reason, token, byte offset, field, expected and found.");
   m.def(
-      "check", [](const std::string& path) { return plan_file(path, "v2", kDefaultBaud); }, py::arg("path"),
+      "check", [](const std::filesystem::path& path) { return plan_file(path, "v2", kDefaultBaud); }, py::arg("path"),
       "Validates (and plans) a motion file; raises MotionFileError carrying every mistake with line and column.");
   m.def("plan", &plan_file, py::arg("path"), py::kw_only(), py::arg("firmware") = "v2", py::arg("baud") = kDefaultBaud,
         "Plans a motion file: the timeline (actions) and each motor's velocity samples (tracks).");
@@ -395,7 +398,11 @@ void define_module(py::module_& m) {
           "Iterates over events, oldest first (up to 1000 kept since the board opened), reading the board while none "
           "is waiting; ends when none came within timeout seconds (None: never).")
       .def("listen", &Board::listen, py::arg("seconds"), "Reads the board for seconds, running on_event callbacks.")
-      .def("run_file", &Board::run_file, py::arg("path"), py::kw_only(), py::arg("progress") = py::none(),
+      .def("run_file",
+           [](Board& b, const std::filesystem::path& path, py::object progress, size_t start_at) {
+             return b.run_file(path.string(), std::move(progress), start_at);
+           },
+           py::arg("path"), py::kw_only(), py::arg("progress") = py::none(),
            py::arg("start_at") = 1,
            "Validates, plans and runs a motion file, calling progress(Progress) as actions start and end; start_at "
            "resumes at that action. Returns the actions completed.")
@@ -413,9 +420,10 @@ void define_module(py::module_& m) {
 
   m.def(
       "open",
-      [](std::optional<std::string> port, std::optional<std::string> profile, std::optional<uint32_t> baud, double timeout,
-         const std::string& firmware, double watchdog) {
-        return Board::open(OpenOptions{port, profile, baud, timeout, firmware, watchdog});
+      [](std::optional<std::string> port, std::optional<std::filesystem::path> profile, std::optional<uint32_t> baud,
+         double timeout, const std::string& firmware, double watchdog) {
+        const std::optional<std::string> profile_path = profile ? std::optional<std::string>(profile->string()) : std::nullopt;
+        return Board::open(OpenOptions{port, profile_path, baud, timeout, firmware, watchdog});
       },
       py::arg("port") = py::none(), py::arg("profile") = py::none(), py::kw_only(), py::arg("baud") = py::none(),
       py::arg("timeout") = 1.0, py::arg("firmware") = "auto", py::arg("watchdog") = 0.5,

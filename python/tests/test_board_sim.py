@@ -59,7 +59,9 @@ def test_move_arguments_are_checked(sim_url):
 
 def test_profile_axes_in_units_end_to_end(sim_url, examples):
     """Home, move in the axis's units, LEDs and status: the maker's whole script."""
-    with hmc.open(sim_url(), profile=os.path.join(examples, "camera-slider.toml")) as b:
+    import pathlib
+
+    with hmc.open(sim_url(), profile=pathlib.Path(examples) / "camera-slider.toml") as b:
         assert b.axes == ["slide"]
         b.home("slide")
         st = b.status().motors[0]

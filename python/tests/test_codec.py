@@ -93,7 +93,9 @@ def test_check_an_unreadable_file():
 
 
 def test_plan_gives_a_timeline_and_velocity_samples(examples):
-    plan = hmc.plan(os.path.join(examples, "pan-tilt-scan.json"))
+    import pathlib
+
+    plan = hmc.plan(pathlib.Path(examples, "pan-tilt-scan.json"))
     assert plan.duration_s > 0 and len(plan.actions) > 3
     assert [a.index for a in plan.actions] == list(range(1, len(plan.actions) + 1))
     assert all(a.line > 0 for a in plan.actions)

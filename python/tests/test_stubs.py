@@ -6,7 +6,7 @@ import os
 import hmc
 
 STUBS = os.path.join(os.path.dirname(hmc.__file__), "hmc.pyi")
-ALIASES = {"Number", "QuantityLike", "AxisLike", "Colour"}
+ALIASES = {"Number", "QuantityLike", "AxisLike", "Colour", "PathLike"}
 
 
 def stub_tree():
