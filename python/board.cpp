@@ -728,7 +728,7 @@ py::object Board::profile_axes() const {
 
 // ---- motion files -------------------------------------------------------------------------
 
-size_t Board::run_file(const std::string& path, py::object progress, size_t start_at) {
+size_t Board::run_file(const std::string& path, py::object progress, size_t start_at, const StartPositions& at) {
   if (start_at < 1) invalid("start_at counts from 1");
   Result<motion::MotionFile, std::vector<motion::FileError>> file = motion::load_motion_file(path);
   Failure failure;
@@ -739,7 +739,10 @@ size_t Board::run_file(const std::string& path, py::object progress, size_t star
     call([&](Session& s) -> int {
       motion::PlanOptions options;
       options.firmware = s.firmware() == Firmware::kV2 ? motion::TargetFirmware::kV2 : motion::TargetFirmware::kSeed;
-      if (s.firmware() == Firmware::kV2) {
+      if (at) {
+        // Resuming: the plan counts from where the motors were when the file first started.
+        for (uint32_t m = 1; m <= proto::kMotorCount; ++m) options.start_position[m - 1] = (*at)[m - 1];
+      } else if (s.firmware() == Firmware::kV2) {
         // Absolute moves start from where the board says each motor is.
         for (const motion::MotorConfig& mc : file->motors) {
           const MotorStatus& status = s.model().motor(mc.motor);
@@ -758,6 +761,7 @@ size_t Board::run_file(const std::string& path, py::object progress, size_t star
       }
       motion::RunOptions run_options;
       run_options.from = start_at;
+      run_options.resume = at.has_value();
       if (!progress.is_none()) {
         run_options.on_event = [this, &progress](const motion::RunEvent& e) {
           if (!python_polls_) return;

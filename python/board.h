@@ -11,6 +11,7 @@
 
 #include <pybind11/pybind11.h>
 
+#include <array>
 #include <atomic>
 #include <deque>
 #include <memory>
@@ -70,7 +71,10 @@ class Board {
   std::optional<EventRecord> next_event(std::optional<double> timeout_s);
   void listen(double seconds);
 
-  size_t run_file(const std::string& path, py::object progress, size_t start_at);
+  // `at`: where motors 1-3 were (steps; None unknown) when the file first started: the motors go
+  // first to where the plan has them at `start_at` (as `hmc run --from K --at P1,P2,P3`).
+  using StartPositions = std::optional<std::array<std::optional<int64_t>, proto::kMotorCount>>;
+  size_t run_file(const std::string& path, py::object progress, size_t start_at, const StartPositions& at);
 
   // Stops the motors this board started (unless kept running), then closes the port.
   void close();

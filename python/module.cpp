@@ -399,13 +399,14 @@ void define_module(py::module_& m) {
           "is waiting; ends when none came within timeout seconds (None: never).")
       .def("listen", &Board::listen, py::arg("seconds"), "Reads the board for seconds, running on_event callbacks.")
       .def("run_file",
-           [](Board& b, const std::filesystem::path& path, py::object progress, size_t start_at) {
-             return b.run_file(path.string(), std::move(progress), start_at);
-           },
-           py::arg("path"), py::kw_only(), py::arg("progress") = py::none(),
-           py::arg("start_at") = 1,
+           [](Board& b, const std::filesystem::path& path, py::object progress, size_t start_at,
+              const Board::StartPositions& at) { return b.run_file(path.string(), std::move(progress), start_at, at); },
+           py::arg("path"), py::kw_only(), py::arg("progress") = py::none(), py::arg("start_at") = 1,
+           py::arg("at") = py::none(),
            "Validates, plans and runs a motion file, calling progress(Progress) as actions start and end; start_at "
-           "resumes at that action. Returns the actions completed.")
+           "resumes at that action. at=(p1, p2, p3): where motors 1-3 were (steps, None unknown) when the file first "
+           "started, as an interrupted run's status said: the motors first go where the plan has them at start_at "
+           "(hmc run --from K --at). Returns the actions completed.")
       .def("close", &Board::close, "Stops the motors this Board set moving (unless keep_running) and closes the port.")
       .def("__enter__", [](Board& b) -> Board& { return b; })
       .def("__exit__", [](Board& b, py::object type, py::object, py::object) {

@@ -272,6 +272,19 @@ def test_run_file_with_progress(sim_url, examples):
             b.run_file(os.path.join(examples, "camera-slider.json"), start_at=99)
 
 
+def test_run_file_resumes_where_the_plan_has_the_motors(sim_url, examples):
+    path = os.path.join(examples, "camera-slider.json")
+    plan = hmc.plan(path)
+    glide_out = next(a.index for a in plan.actions if a.description == "glide out")
+    with hmc.open(sim_url()) as b:
+        progress = []
+        # The file first started with motor 3 at 0; resume after its glide out of 4 turns.
+        done = b.run_file(path, start_at=glide_out + 1, at=(None, None, 0), progress=progress.append)
+        assert done == len(plan.actions) - glide_out
+        assert progress[0].kind == "returning"
+        assert b.status().motors[2].position == 0  # back from 12800 (4 turns at 1/16) to where it began
+
+
 def test_run_file_refuses_a_file_with_mistakes(sim_url, tmp_path):
     bad = tmp_path / "bad.json"
     bad.write_text('{"hmc_motion": 1, "motors": {}, "steps": [{"servo": {"id": 3, "angle": 90}}]}')
