@@ -31,15 +31,6 @@ std::optional<Millis> limit_of(std::optional<double> timeout_s) {
   return millis(*timeout_s);
 }
 
-[[noreturn]] void raise_profile_error(const ProfileError& e) {
-  py::list mistakes;
-  for (const ProfileMistake& m : e.mistakes) mistakes.append(py::make_tuple(m.place.line, m.place.column, m.message));
-  py::dict a;
-  a["path"] = e.path;
-  a["mistakes"] = mistakes;
-  raise(e.unreadable ? exceptions().port_error : exceptions().profile_error, e.text(), a);
-}
-
 void warn_notes(const std::vector<std::string>& notes) {
   if (notes.empty()) return;
   py::object warn = py::module_::import("warnings").attr("warn");
@@ -730,7 +721,9 @@ py::object Board::profile_axes() const {
 
 size_t Board::run_file(const std::string& path, py::object progress, size_t start_at, const StartPositions& at) {
   if (start_at < 1) invalid("start_at counts from 1");
-  Result<motion::MotionFile, std::vector<motion::FileError>> file = motion::load_motion_file(path);
+  motion::ReadOptions read;
+  if (profile_) read.profile = &*profile_;  // a file that names no profile and declares no motors is in the board's
+  Result<motion::MotionFile, std::vector<motion::FileError>> file = motion::load_motion_file(path, read);
   Failure failure;
   std::optional<motion::RunReport> report;
   size_t actions = 0;

@@ -150,10 +150,19 @@ FrameRecord decode_line(const std::string& line, bool board, bool crc) {
   return command_record(*decoded, mode);
 }
 
-PlanRecord plan_file(const std::filesystem::path& file_path, const std::string& firmware, uint32_t baud) {
+PlanRecord plan_file(const std::filesystem::path& file_path, const std::optional<std::filesystem::path>& profile_path,
+                     const std::string& firmware, uint32_t baud) {
   const std::string path = file_path.string();
   if (firmware != "v2" && firmware != "seed") raise(exceptions().invalid_command, "firmware is 'v2' or 'seed', not '" + firmware + "'");
-  Result<motion::MotionFile, std::vector<motion::FileError>> file = motion::load_motion_file(path);
+  std::optional<Profile> profile;
+  if (profile_path) {
+    Result<Profile, ProfileError> loaded = load_profile(profile_path->string());
+    if (!loaded) raise_profile_error(loaded.error());
+    profile = std::move(*loaded);
+  }
+  motion::ReadOptions read;
+  if (profile) read.profile = &*profile;
+  Result<motion::MotionFile, std::vector<motion::FileError>> file = motion::load_motion_file(path, read);
   if (!file) raise_motion_file_error(file.error());
   motion::PlanOptions options;
   options.firmware = firmware == "seed" ? motion::TargetFirmware::kSeed : motion::TargetFirmware::kV2;
@@ -332,10 +341,17 @@ void define_module(py::module_& m) {
         "Judges one line as the board does and returns a Frame; board=True reads a frame the board sends (ACK, NAK, "
         "STA, EVD, ...). Raises FrameError naming the reason, token, byte offset, field, expected and found.");
   m.def(
-      "check", [](const std::filesystem::path& path) { return plan_file(path, "v2", kDefaultBaud); }, py::arg("path"),
-      "Validates (and plans) a motion file; raises MotionFileError carrying every mistake with line and column.");
-  m.def("plan", &plan_file, py::arg("path"), py::kw_only(), py::arg("firmware") = "v2", py::arg("baud") = kDefaultBaud,
-        "Plans a motion file: the timeline (actions) and each motor's velocity samples (tracks).");
+      "check",
+      [](const std::filesystem::path& path, const std::optional<std::filesystem::path>& profile) {
+        return plan_file(path, profile, "v2", kDefaultBaud);
+      },
+      py::arg("path"), py::kw_only(), py::arg("profile") = py::none(),
+      "Validates (and plans) a motion file; raises MotionFileError carrying every mistake with line and column. "
+      "profile: the machine profile for a file that names none and declares no motors.");
+  m.def("plan", &plan_file, py::arg("path"), py::kw_only(), py::arg("profile") = py::none(), py::arg("firmware") = "v2",
+        py::arg("baud") = kDefaultBaud,
+        "Plans a motion file: the timeline (actions) and each motor's velocity samples (tracks). profile: as for "
+        "check().");
 
   // ---- boards ---------------------------------------------------------------------------
   py::class_<EventIterator>(m, "EventIterator", "Events as they come (board.events()).")

@@ -244,6 +244,15 @@ void raise_diagnostic(const Diagnostic& d, const std::string& input) {
   raise(exceptions().frame_error, std::string(proto::reason_spec(d.reason).name) + ": " + d.message, a);
 }
 
+void raise_profile_error(const ProfileError& e) {
+  py::list mistakes;
+  for (const ProfileMistake& m : e.mistakes) mistakes.append(py::make_tuple(m.place.line, m.place.column, m.message));
+  py::dict a;
+  a["path"] = e.path;
+  a["mistakes"] = mistakes;
+  raise(e.unreadable ? exceptions().port_error : exceptions().profile_error, e.text(), a);
+}
+
 void raise_motion_file_error(const std::vector<motion::FileError>& errors) {
   std::vector<MistakeRecord> mistakes;
   std::string text;

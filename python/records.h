@@ -134,6 +134,8 @@ void make_exceptions(py::module_& m);
 [[noreturn]] void raise_session_error(const SessionError& error);
 // A codec refusal as hmc.FrameError with its diagnostic.
 [[noreturn]] void raise_diagnostic(const Diagnostic& diagnostic, const std::string& input);
+// A profile's mistakes as hmc.ProfileError (an unreadable file: hmc.PortError).
+[[noreturn]] void raise_profile_error(const ProfileError& error);
 // Every mistake of a motion file as hmc.MotionFileError (errors: a list of Mistake).
 [[noreturn]] void raise_motion_file_error(const std::vector<motion::FileError>& errors);
 py::dict diagnostic_attributes(const Diagnostic& diagnostic);

@@ -342,3 +342,19 @@ def test_threads_share_a_board(sim_url):
             t.join()
         assert not errors
         assert [m.position for m in b.status().motors[1:]] == [300, 300]
+
+
+def test_a_motion_file_in_the_boards_profile(sim_url, examples, tmp_path):
+    """A file that names no profile and declares no motors is read in the board's (or check's) profile."""
+    slider = os.path.join(examples, "camera-slider.toml")
+    glide = tmp_path / "glide.json"
+    glide.write_text('{"hmc_motion": 1, "steps": [{"home": "slide"},'
+                     ' {"move": {"motor": "slide", "to": {"mm": 100}, "speed": {"mm_per_s": 100}}}]}')
+    assert len(hmc.check(glide, profile=slider).actions) == 2
+    with pytest.raises(hmc.MotionFileError):
+        hmc.check(glide)  # no motors, no profile
+    with pytest.raises(hmc.ProfileError):
+        hmc.plan(glide, profile=tmp_path / "glide.json")
+    with hmc.open(sim_url(), profile=slider) as b:
+        assert b.run_file(glide) == 2
+        assert b.status().motors[0].units == pytest.approx(100)
