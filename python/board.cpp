@@ -31,12 +31,6 @@ std::optional<Millis> limit_of(std::optional<double> timeout_s) {
   return millis(*timeout_s);
 }
 
-void warn_notes(const std::vector<std::string>& notes) {
-  if (notes.empty()) return;
-  py::object warn = py::module_::import("warnings").attr("warn");
-  for (const std::string& note : notes) warn(note, exceptions().rounding_warning, 2);
-}
-
 // What a board call brings back besides its value: an error to raise once the GIL is held again.
 struct Failure {
   std::optional<SessionError> session;
@@ -421,7 +415,7 @@ MotorRecord Board::move(const py::object& axis, const py::object& to, const py::
     }
     return s.model().motor(m);
   });
-  warn_notes(notes);
+  warn_rounding(notes);
   failure.raise_if_any();
   if (moved && !wait) {
     if (keep_running) {
@@ -479,7 +473,7 @@ void Board::run(const py::object& axis, const py::object& rate, const py::object
     if (SessionResult<BoardFrame> sent = s.execute(endless); !sent) failure.session = sent.error();
     return 0;
   });
-  warn_notes(notes);
+  warn_rounding(notes);
   failure.raise_if_any();
   if (keep_running) {
     started_.erase(m);
@@ -593,7 +587,7 @@ MotorRecord Board::zero(const py::object& axis, const py::object& position) {
     }
     return s.model().motor(m);
   });
-  warn_notes(notes);
+  warn_rounding(notes);
   failure.raise_if_any();
   return motor_record(motor, std::nullopt, profile_axis(m));
 }
@@ -728,6 +722,7 @@ size_t Board::run_file(const std::string& path, py::object progress, size_t star
   std::optional<motion::RunReport> report;
   size_t actions = 0;
   if (!file) failure.file_errors = file.error();
+  if (file) warn_rounding(file->notes);
   if (!failure.file_errors) {
     call([&](Session& s) -> int {
       motion::PlanOptions options;

@@ -164,6 +164,7 @@ PlanRecord plan_file(const std::filesystem::path& file_path, const std::optional
   if (profile) read.profile = &*profile;
   Result<motion::MotionFile, std::vector<motion::FileError>> file = motion::load_motion_file(path, read);
   if (!file) raise_motion_file_error(file.error());
+  warn_rounding(file->notes);
   motion::PlanOptions options;
   options.firmware = firmware == "seed" ? motion::TargetFirmware::kSeed : motion::TargetFirmware::kV2;
   options.baud = baud;

@@ -244,6 +244,18 @@ void raise_diagnostic(const Diagnostic& d, const std::string& input) {
   raise(exceptions().frame_error, std::string(proto::reason_spec(d.reason).name) + ": " + d.message, a);
 }
 
+void warn_rounding(const std::vector<std::string>& notes) {
+  if (notes.empty()) return;
+  py::object warn = py::module_::import("warnings").attr("warn");
+  for (const std::string& note : notes) warn(note, exceptions().rounding_warning, 2);
+}
+
+void warn_rounding(const std::vector<motion::FileError>& notes) {
+  std::vector<std::string> texts;
+  for (const motion::FileError& n : notes) texts.push_back(n.text());
+  warn_rounding(texts);
+}
+
 void raise_profile_error(const ProfileError& e) {
   py::list mistakes;
   for (const ProfileMistake& m : e.mistakes) mistakes.append(py::make_tuple(m.place.line, m.place.column, m.message));

@@ -134,6 +134,9 @@ void make_exceptions(py::module_& m);
 [[noreturn]] void raise_session_error(const SessionError& error);
 // A codec refusal as hmc.FrameError with its diagnostic.
 [[noreturn]] void raise_diagnostic(const Diagnostic& diagnostic, const std::string& input);
+// Values rounded to a whole step, each said as an hmc.RoundingWarning.
+void warn_rounding(const std::vector<std::string>& notes);
+void warn_rounding(const std::vector<motion::FileError>& notes);
 // A profile's mistakes as hmc.ProfileError (an unreadable file: hmc.PortError).
 [[noreturn]] void raise_profile_error(const ProfileError& error);
 // Every mistake of a motion file as hmc.MotionFileError (errors: a list of Mistake).

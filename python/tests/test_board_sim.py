@@ -351,10 +351,14 @@ def test_a_motion_file_in_the_boards_profile(sim_url, examples, tmp_path):
     glide.write_text('{"hmc_motion": 1, "steps": [{"home": "slide"},'
                      ' {"move": {"motor": "slide", "to": {"mm": 100}, "speed": {"mm_per_s": 100}}}]}')
     assert len(hmc.check(glide, profile=slider).actions) == 2
+    glide.write_text(glide.read_text().replace('"mm": 100', '"mm": 12.3456'))
+    with pytest.warns(hmc.RoundingWarning, match="12.3456 mm is 987.648 steps: rounded to 988"):
+        hmc.plan(glide, profile=slider)
     with pytest.raises(hmc.MotionFileError):
         hmc.check(glide)  # no motors, no profile
     with pytest.raises(hmc.ProfileError):
         hmc.plan(glide, profile=tmp_path / "glide.json")
     with hmc.open(sim_url(), profile=slider) as b:
-        assert b.run_file(glide) == 2
-        assert b.status().motors[0].units == pytest.approx(100)
+        with pytest.warns(hmc.RoundingWarning):
+            assert b.run_file(glide) == 2
+        assert b.status().motors[0].position == 988
