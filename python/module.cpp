@@ -6,7 +6,6 @@
 
 #include <cstdio>
 #include <filesystem>
-#include <initializer_list>
 
 #include "board.h"
 #include "hmc/motion_file.h"
