@@ -10,8 +10,6 @@
 namespace hmc::cli {
 namespace {
 
-constexpr uint32_t kMaxAccel = proto::kSettings[proto::kSettingAccel - 1].max;
-
 std::string axes_list(const Profile* profile) {
   if (profile == nullptr || profile->axes.empty()) return "no profile axes (docs/config.md)";
   std::string names;
@@ -26,20 +24,6 @@ std::optional<uint32_t> motor_number(const std::string& text) {
   return std::nullopt;
 }
 
-// A quantity for `axis` in steps, with a note when it falls between steps.
-Result<StepCount> steps_of(const Axis& axis, const std::string& text, Dimension wanted, const char* option,
-                           std::vector<std::string>& notes) {
-  Result<Quantity> q = parse_quantity(text);
-  if (!q) return Error{std::string(option) + ": " + q.error().message + " (axis '" + axis.name + "' takes " + axis.units_words() + ")"};
-  Result<StepCount> steps = axis.to_steps(*q, wanted);
-  if (!steps) return Error{std::string(option) + ": " + steps.error().message};
-  if (steps->rounded()) {
-    notes.push_back(std::string(option) + " " + text + " on axis '" + axis.name + "' is " + number_text(steps->exact) + " " +
-                    unit_text(Unit::kSteps, wanted) + ": rounded to " + std::to_string(steps->steps));
-  }
-  return steps;
-}
-
 }  // namespace
 
 Result<Axis> resolve_axis(const std::string& text, const Profile* profile, const BoardModel& model, uint32_t steps_per_rev) {
@@ -51,13 +35,7 @@ Result<Axis> resolve_axis(const std::string& text, const Profile* profile, const
     return Error{"no axis '" + text + "': give a motor 1-" + std::to_string(proto::kMotorCount) + " or an axis name; " +
                  axes_list(profile)};
   }
-  Axis axis;
-  axis.name = "motor " + text;
-  axis.motor = *motor;
-  axis.steps_per_rev = steps_per_rev;
-  axis.microstep = model.motor(*motor).microstep;
-  axis.rotary = true;
-  return axis;
+  return plain_motor_axis(*motor, model.motor(*motor).microstep, steps_per_rev);
 }
 
 Result<std::vector<uint32_t>> resolve_motors(const std::string& text, const Profile* profile,
@@ -82,119 +60,13 @@ Result<std::vector<uint32_t>> resolve_motors(const std::string& text, const Prof
   return motors;
 }
 
-Result<uint32_t> accel_steps(const Axis& axis, const std::string& text, std::vector<std::string>& notes) {
-  if (!text.empty() && text.find_first_not_of("0123456789") == std::string::npos) {
-    const unsigned long long value = std::stoull(text.substr(0, 10));
-    if (text.size() > 10 || value > kMaxAccel) {
-      return Error{"--accel " + text + " steps/s2 is beyond the board's " +
-                   std::to_string(kMaxAccel)};
-    }
-    return static_cast<uint32_t>(value);
-  }
-  Result<StepCount> steps = steps_of(axis, text, Dimension::kAcceleration, "--accel", notes);
-  if (!steps) return steps.error();
-  if (steps->steps < 0 || steps->steps > kMaxAccel) {
-    return Error{"--accel " + text + " is " + std::to_string(steps->steps) + " steps/s2: the board takes 0-" +
-                 std::to_string(kMaxAccel)};
-  }
-  return static_cast<uint32_t>(steps->steps);
-}
-
-Result<UnitMove> unit_move(const Axis& axis, const MotorStatus& motor, const UnitMoveRequest& r) {
-  if (r.to.has_value() == r.by.has_value()) return Error{"give the target once: --to POSITION or --by DISTANCE"};
-  UnitMove out;
-  const double here = axis.from_board_position(motor.position);
-  if (r.to) {
-    Result<StepCount> to = steps_of(axis, *r.to, Dimension::kPosition, "--to", out.notes);
-    if (!to) return to.error();
-    out.target = to->exact / axis.steps_per_unit();
-  } else {
-    Result<StepCount> by = steps_of(axis, *r.by, Dimension::kPosition, "--by", out.notes);
-    if (!by) return by.error();
-    out.target = here + by->exact / axis.steps_per_unit();
-  }
-  // The absolute target in whole steps: the rounding is of this one position, never of a distance.
-  const StepCount target = axis.to_board_position(out.target);
-  out.target_position = target.steps;
-  const int64_t per_step = 256 / axis.microstep;
-  const int64_t steps = std::llround(static_cast<double>(target.steps - motor.position) / static_cast<double>(per_step));
-  if (std::llabs(steps) > 2147483647) return Error{"the move is more than 2147483647 steps"};
-  if (r.speed) {
-    // A speed becomes a whole number of microseconds per step, not of steps: said only when
-    // that is more than 1 % off.
-    std::vector<std::string> unsaid;
-    Result<StepCount> speed = steps_of(axis, *r.speed, Dimension::kSpeed, "--speed", unsaid);
-    if (!speed) return speed.error();
-    if (!(speed->exact > 0)) return Error{"--speed must be above 0"};
-    out.delay_us = static_cast<uint32_t>(std::max(1LL, std::llround(1e6 / speed->exact)));
-    const double actual = 1e6 / *out.delay_us / axis.steps_per_unit();
-    const double wanted = speed->exact / axis.steps_per_unit();
-    if (std::fabs(actual - wanted) > 0.01 * wanted) {
-      out.notes.push_back("--speed " + *r.speed + " on axis '" + axis.name + "' is " + std::to_string(*out.delay_us) +
-                          " us per step: " + number_text(actual) + " " + unit_text(axis.unit(), Dimension::kSpeed));
-    }
-  } else if (axis.speed) {
-    out.delay_us = static_cast<uint32_t>(std::llround(1e6 / (*axis.speed * axis.steps_per_unit())));
-  }
-  if (r.accel) {
-    Result<uint32_t> accel = accel_steps(axis, *r.accel, out.notes);
-    if (!accel) return accel.error();
-    out.accel = *accel;
-  } else if (axis.accel) {
-    out.accel = static_cast<uint32_t>(std::llround(*axis.accel * axis.steps_per_unit()));
-  }
-  if (steps != 0) {
-    StepperMove move;
-    move.motor = axis.motor;
-    move.dir = steps < 0 ? proto::kActionReverse : proto::kActionForward;
-    move.microstep = axis.microstep;
-    move.steps = static_cast<uint32_t>(std::llabs(steps));
-    move.delay_us = out.delay_us.value_or(0);
-    out.move = move;
-  }
-  return out;
-}
-
-HomingSetup homing_setup(const Axis& axis, StepperMove move) {
-  HomingSetup setup;
-  if (!axis.homing) {
-    setup.move = move;
-    return setup;
-  }
-  const AxisHoming& h = *axis.homing;
-  const double per_unit = axis.steps_per_unit();
-  const auto delay_of = [per_unit](double speed) { return static_cast<uint32_t>(std::llround(1e6 / (speed * per_unit))); };
-  if (move.microstep == 0) move.microstep = axis.microstep;
-  if (move.delay_us == 0 && h.seek_speed) move.delay_us = delay_of(*h.seek_speed);
-  setup.settings.push_back(SetSetting{axis.motor, proto::kSettingHomeEnd, h.end});
-  if (h.pull_off) {
-    setup.settings.push_back(
-        SetSetting{axis.motor, proto::kSettingHomePullOff, static_cast<uint32_t>(std::llround(*h.pull_off * per_unit))});
-  }
-  if (h.locate_speed) setup.settings.push_back(SetSetting{axis.motor, proto::kSettingHomeLocate, delay_of(*h.locate_speed)});
-  setup.move = move;
-  return setup;
-}
-
 Status send_soft_limits(Session& s, const Axis& axis) {
-  if (!axis.limit_min || s.firmware() != Firmware::kV2 || !s.model().motor(axis.motor).homed) return Done{};
-  int64_t low = axis.to_board_position(*axis.limit_min).steps;
-  int64_t high = axis.to_board_position(*axis.limit_max).steps;
-  if (low > high) std::swap(low, high);  // an inverted axis
-  const auto magnitude = [](int64_t v) { return static_cast<uint32_t>(std::llabs(v)); };
-  const SoftLimits limits{axis.motor, low < 0 ? 1u : 0u, magnitude(low), high < 0 ? 1u : 0u, magnitude(high)};
-  if (SessionResult<BoardFrame> sent = s.execute(limits); !sent) {
+  const std::optional<SoftLimits> limits = soft_limits_command(axis);
+  if (!limits || s.firmware() != Firmware::kV2 || !s.model().motor(axis.motor).homed) return Done{};
+  if (SessionResult<BoardFrame> sent = s.execute(*limits); !sent) {
     return Error{"axis '" + axis.name + "': its soft limits were not taken: " + sent.error().message};
   }
   return Done{};
-}
-
-std::optional<std::string> beyond_soft_limits(const Axis& axis, const MotorStatus& motor, double target) {
-  if (!axis.limit_min || !motor.homed) return std::nullopt;
-  if (target >= *axis.limit_min - 1e-9 && target <= *axis.limit_max + 1e-9) return std::nullopt;
-  const std::string u = unit_name(axis.unit());
-  return "axis '" + axis.name + "': " + number_text(target) + " " + u + " is beyond its soft limits, " +
-         number_text(*axis.limit_min) + " to " + number_text(*axis.limit_max) + " " + u + " (the profile's)";
 }
 
 std::string axis_position_words(const Axis& axis, const MotorStatus& m) {

@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "hmc/axis_moves.h"
 #include "hmc/command.h"
 #include "hmc/profile.h"
 #include "hmc/session.h"
@@ -25,40 +26,8 @@ Result<Axis> resolve_axis(const std::string& text, const Profile* profile, const
 Result<std::vector<uint32_t>> resolve_motors(const std::string& text, const Profile* profile,
                                              const std::vector<uint32_t>& all);
 
-struct UnitMoveRequest {
-  std::optional<std::string> to, by;  // exactly one: an absolute position or a distance
-  std::optional<std::string> speed;   // default: the axis's speed (else the caller's delay)
-  std::optional<std::string> accel;   // a number (steps/s^2) or a quantity; default: the axis's
-};
-
-struct UnitMove {
-  std::optional<StepperMove> move;     // none when the axis is already there
-  std::optional<uint32_t> accel;       // steps/s^2 to SET first
-  std::optional<uint32_t> delay_us;    // from the speed; none: the caller's default
-  double target = 0;                   // axis units
-  int64_t target_position = 0;         // the board's position at the end, 1/256 step
-  std::vector<std::string> notes;      // values rounded to whole steps, said to the user
-};
-
-// The move that brings `axis` from where `motor` is to the target, or why not: a unit the axis
-// does not have, a speed where a position is wanted.
-Result<UnitMove> unit_move(const Axis& axis, const MotorStatus& motor, const UnitMoveRequest& request);
-
-// Why `target` (axis units) is refused: beyond the axis's soft limits. Judged only where the
-// position means something (the motor homed since power-up); nullopt when it may go there.
-std::optional<std::string> beyond_soft_limits(const Axis& axis, const MotorStatus& motor, double target);
-
-// A step count for the acceleration option: "8000" (steps/s^2 as before) or "100mm/s2".
-Result<uint32_t> accel_steps(const Axis& axis, const std::string& text, std::vector<std::string>& notes);
-
-// Homing `axis` as its profile says: the settings to SET first (the switch end, the pull-off and
-// the slow re-approach) and the homing move (its microstep; its delay from the seek speed),
-// keeping what the command line gave in `move` (a microstep or delay other than 0).
-struct HomingSetup {
-  std::vector<SetSetting> settings;
-  StepperMove move;
-};
-HomingSetup homing_setup(const Axis& axis, StepperMove move);
+// Moves in units (unit_move), soft limits and homing setups are libhmc's: hmc/axis_moves.h,
+// shared with the Python module.
 
 // Sends the axis's soft limits (LIM, in the board's positions) when its position means
 // something — the motor homed or zeroed since power-up — as grbl enforces limits only then; does

@@ -18,8 +18,8 @@
 namespace hmc::cli {
 namespace {
 
-constexpr uint32_t kDefaultDelayUs = 500;
-constexpr uint32_t kFullStepsPerRev = 200;
+constexpr uint32_t kDefaultDelayUs = kDefaultMoveDelayUs;
+constexpr uint32_t kFullStepsPerRev = kDefaultStepsPerRev;
 
 // One command's run: connect, act, and set the exit code; `act` returns an exit code.
 template <typename Act>
@@ -467,17 +467,6 @@ void add_servo(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   });
 }
 
-// "#RRGGBB", "#RRGGBBWW" (the # optional), or "off".
-Result<LedColor> parse_colour(uint32_t strip, const std::string& text) {
-  if (text == "off") return LedColor{strip, 0, 0, 0, 0};
-  const std::string hex = !text.empty() && text[0] == '#' ? text.substr(1) : text;
-  if ((hex.size() != 6 && hex.size() != 8) || hex.find_first_not_of("0123456789abcdefABCDEF") != std::string::npos) {
-    return Error{"colour '" + text + "' is not #RRGGBB or #RRGGBBWW (hex), nor R G B W, nor off"};
-  }
-  const auto byte = [&](size_t i) { return static_cast<uint32_t>(std::stoul(hex.substr(2 * i, 2), nullptr, 16)); };
-  return LedColor{strip, byte(0), byte(1), byte(2), hex.size() == 8 ? byte(3) : 0};
-}
-
 void add_led(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   struct Options {
     uint32_t strip = 1;
@@ -491,7 +480,7 @@ void add_led(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     run_on_board(g, exit_code, [&](Session& s) {
       Result<LedColor> led = Error{"give the colour as R G B W (four numbers 0-255), #RRGGBB[WW], or off"};
       if (o->colour.size() == 1) {
-        led = parse_colour(o->strip, o->colour[0]);
+        led = parse_led_colour(o->strip, o->colour[0]);
       } else if (o->colour.size() == 4) {
         std::vector<std::string> words{"LED", std::to_string(o->strip)};
         words.insert(words.end(), o->colour.begin(), o->colour.end());

@@ -86,15 +86,4 @@ Result<GlobalOptions, int> with_profile_link(const GlobalOptions& o) {
   return out;
 }
 
-std::string number_text(double value, int decimals) {
-  char text[64];
-  std::snprintf(text, sizeof text, "%.*f", decimals, value);
-  std::string s = text;
-  if (s.find('.') != std::string::npos) {
-    while (s.back() == '0') s.pop_back();
-    if (s.back() == '.') s.pop_back();
-  }
-  return s == "-0" ? "0" : s;
-}
-
 }  // namespace hmc::cli

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "connection.h"
+#include "hmc/axis_moves.h"
 #include "hmc/profile.h"
 
 namespace hmc::cli {
@@ -30,7 +31,6 @@ int report_profile_error(const GlobalOptions& options, const ProfileError& error
 // (or HMC_PORT) gave none.
 Result<GlobalOptions, int> with_profile_link(const GlobalOptions& options);
 
-// A number for people: at most `decimals` decimals, trailing zeros dropped ("250", "26.667").
-std::string number_text(double value, int decimals = 3);
+// number_text(), a number for people ("250", "26.667"), is libhmc's: hmc/axis_moves.h.
 
 }  // namespace hmc::cli

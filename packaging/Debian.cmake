@@ -37,6 +37,9 @@ endif()
 if(TARGET hmc_emu)
   list(APPEND CPACK_COMPONENTS_ALL hmc-emu)
 endif()
+if(TARGET hmc_python)
+  list(APPEND CPACK_COMPONENTS_ALL python3-hmc)
+endif()
 
 foreach(pkg ${CPACK_COMPONENTS_ALL})
   string(TOUPPER ${pkg} component)
@@ -79,6 +82,18 @@ serving the serial protocol like the real board. hmc-emu-bootloader plays
 the SAM-BA bootloader and the UF2 drive, so bossac and hmc flash can be run
 against it.")
 set(CPACK_DEBIAN_HMC-EMU_PACKAGE_SUGGESTS "hmc, bossa-cli")
+
+set(CPACK_COMPONENT_PYTHON3-HMC_DESCRIPTION
+    "Python module for the Hybrid Motor Controller board
+import hmc: open a board (serial, TCP, or the simulated one in-process),
+move its steppers in the machine profile's millimetres and degrees, wait
+for motions (Ctrl-C stops every motor), set servos and LED strips, read its
+status and events, run motion files, and encode and decode the protocol's
+frames with the codec's diagnostics.")
+set(CPACK_DEBIAN_PYTHON3-HMC_PACKAGE_SECTION python)
+# The module is built for one interpreter version (its file name says which).
+set(CPACK_DEBIAN_PYTHON3-HMC_PACKAGE_DEPENDS "python3 (>= ${HMC_PYTHON_VERSION}), python3 (<< ${HMC_PYTHON_NEXT_VERSION})")
+set(CPACK_DEBIAN_PYTHON3-HMC_PACKAGE_SUGGESTS "hmc")
 
 set(CPACK_COMPONENT_HMC-FIRMWARE_DESCRIPTION
     "SAMD21 firmware images for the Hybrid Motor Controller (${HMC_BOARD_VARIANT})

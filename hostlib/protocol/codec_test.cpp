@@ -350,3 +350,11 @@ TEST_CASE("encode_into writes the frame encode() returns, and no frame for a ref
   CHECK_FALSE(hmc::encode_into(hmc::StepperMove{3, 3, 0, 0, 0}, text).ok());
   CHECK_FALSE(hmc::encode_into(hmc::SetSetting{1, hmc::proto::kSettingCurrent, 100000}, text).ok());
 }
+
+TEST_CASE("LED colours as people write them") {
+  CHECK(hmc::parse_led_colour(2, "#ff800010").value() == hmc::LedColor{2, 255, 128, 0, 16});
+  CHECK(hmc::parse_led_colour(1, "00ff00").value() == hmc::LedColor{1, 0, 255, 0, 0});
+  CHECK(hmc::parse_led_colour(1, "off").value() == hmc::LedColor{1, 0, 0, 0, 0});
+  CHECK_FALSE(hmc::parse_led_colour(1, "#12"));
+  CHECK_FALSE(hmc::parse_led_colour(1, "#gg0000"));
+}

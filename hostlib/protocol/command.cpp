@@ -220,4 +220,14 @@ struct Describer {
 
 std::string describe(const Command& command) { return std::visit(Describer{}, command); }
 
+Result<LedColor> parse_led_colour(uint32_t strip, std::string_view text) {
+  if (text == "off") return LedColor{strip, 0, 0, 0, 0};
+  const std::string_view hex = !text.empty() && text[0] == '#' ? text.substr(1) : text;
+  if ((hex.size() != 6 && hex.size() != 8) || hex.find_first_not_of("0123456789abcdefABCDEF") != std::string_view::npos) {
+    return Error{"colour '" + std::string(text) + "' is not #RRGGBB or #RRGGBBWW (hex), nor R G B W, nor off"};
+  }
+  const auto byte = [&](size_t i) { return static_cast<uint32_t>(std::stoul(std::string(hex.substr(2 * i, 2)), nullptr, 16)); };
+  return LedColor{strip, byte(0), byte(1), byte(2), hex.size() == 8 ? byte(3) : 0};
+}
+
 }  // namespace hmc

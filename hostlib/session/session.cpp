@@ -321,7 +321,9 @@ SessionResult<BoardFrame> Session::execute(const Command& command) {
   SessionResult<BoardFrame> reply = await_reply(frame.value());
   if (!reply) return reply;
   if (const Nak* nak = std::get_if<Nak>(&reply.value())) {
-    return make_error(SessionError::Kind::kNak, explain_refusal(nak->reason, &command, model_), nak->reason);
+    SessionError refused = make_error(SessionError::Kind::kNak, explain_refusal(nak->reason, &command, model_), nak->reason);
+    refused.nak = *nak;
+    return refused;
   }
   return reply;
 }
@@ -339,10 +341,12 @@ SessionResult<BoardFrame> Session::send_line(std::string_view line) {
   SessionResult<BoardFrame> reply = await_reply(text);
   if (!reply) return reply;
   if (const Nak* nak = std::get_if<Nak>(&reply.value())) {
-    return make_error(SessionError::Kind::kNak,
-                      explain_refusal(nak->reason, decoded ? &decoded->command : nullptr, model_) + " (token " +
-                          std::to_string(nak->token) + ", byte " + std::to_string(nak->offset) + ")",
-                      nak->reason);
+    SessionError refused = make_error(SessionError::Kind::kNak,
+                                      explain_refusal(nak->reason, decoded ? &decoded->command : nullptr, model_) +
+                                          " (token " + std::to_string(nak->token) + ", byte " + std::to_string(nak->offset) + ")",
+                                      nak->reason);
+    refused.nak = *nak;
+    return refused;
   }
   return reply;
 }

@@ -15,6 +15,7 @@
 
 #include "hmc/crc16.h"
 #include "hmc/protocol_facts.h"
+#include "hmc/result.h"
 
 namespace hmc {
 
@@ -135,6 +136,9 @@ const proto::CommandSpec* find_command(std::string_view name);
 
 // One line in words, e.g. "stepper 1 forward 1000 steps at 1/128 step, 500 us per step".
 std::string describe(const Command& command);
+
+// A strip's colour as people write it: "#RRGGBB" (white 0), "#RRGGBBWW" (the # optional), or "off".
+Result<LedColor> parse_led_colour(uint32_t strip, std::string_view text);
 
 // Signed positions in 1/256 step, as the protocol writes them: "-1600", "0", "409600".
 std::string position_text(int64_t position);

@@ -72,6 +72,7 @@ struct SessionError {
   Kind kind = Kind::kLink;
   std::string message;                        // in words, with what to do
   proto::Reason reason = proto::Reason::kOk;  // kInvalid, kRefused, kNak
+  std::optional<Nak> nak{};                   // kNak: the board's refusal as sent (token, byte offset)
 };
 
 template <typename T>
