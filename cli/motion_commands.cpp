@@ -275,8 +275,14 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   CLI::App* cmd = app.add_subcommand("run", "run a motion file on the board (validated first; Ctrl-C stops every motor)");
   cmd->add_option("file", o->path, "the motion file")->required();
   cmd->add_flag("--dry-run", o->dry_run, "print the timeline and the exact frames; no board");
-  cmd->add_option("--from", o->from, "start at this step (as numbered by the plan; after an interruption)")
-      ->check(CLI::PositiveNumber);
+  cmd->add_option("--from", o->from, "start at this step (as numbered by the plan, from 1; after an interruption)")
+      ->check(CLI::Validator(
+          [](const std::string& text) {
+            return text.find_first_not_of("0123456789") == std::string::npos && text.find_first_not_of('0') != std::string::npos
+                       ? std::string()
+                       : "--from takes a step number, 1 or more, not '" + text + "'";
+          },
+          "STEP"));
   cmd->add_option("--at", o->at,
                   "with --from: where motors 1,2,3 were (steps; - unknown) when the file first started, as the "
                   "interrupted run printed; they are first moved to where the plan has them at that step");

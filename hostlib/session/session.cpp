@@ -115,6 +115,10 @@ std::string explain_refusal(Reason reason, const Command* command, const BoardMo
   }
 }
 
+std::string not_homed_cause(const BoardModel& model) {
+  return model.board.emergency ? "the emergency switch stopped it" : "the switch was not found";
+}
+
 Session::Session(std::unique_ptr<Transport> transport, const SessionOptions& options)
     : transport_(std::move(transport)), options_(options) {}
 
@@ -407,9 +411,71 @@ SessionResult<BoardFrame> Session::execute(const Command& command) {
   SessionResult<BoardFrame> reply = await_reply(frame.value());
   if (!reply) return reply;
   if (const Nak* nak = std::get_if<Nak>(&reply.value())) {
-    return make_error(SessionError::Kind::kNak, explain_refusal(nak->reason, &command, model_), nak->reason);
+    const auto* move = std::get_if<StepperMove>(&command);
+    const Reason reason = nak->reason;
+    return make_error(SessionError::Kind::kNak,
+                      reason == Reason::kRateLimit && move != nullptr ? explain_rate_limit(*move)
+                                                                      : explain_refusal(reason, &command, model_),
+                      reason);
   }
   return reply;
+}
+
+std::string Session::explain_rate_limit(const StepperMove& move) {
+  const std::string who = motor_name(move.motor);
+  const auto setting = [&](uint32_t motor, uint32_t id) -> std::optional<uint32_t> {
+    SessionResult<BoardFrame> got = execute(GetSetting{motor, id});
+    const SettingValue* value = got ? std::get_if<SettingValue>(&got.value()) : nullptr;
+    if (value == nullptr) return std::nullopt;
+    return value->value;
+  };
+  const bool homing = move.dir == proto::kActionHome;
+  uint32_t delay = move.delay_us;
+  if (homing && delay == 0) delay = setting(move.motor, proto::kSettingHomeSeek).value_or(0);
+  if (!proto::delay_in_range(delay)) {
+    return who + "'s delay of " + std::to_string(delay) + " us per step is " +
+           (delay < proto::kShortestDelayUs ? "shorter than the shortest" : "longer than the longest") +
+           " the board's step timer makes: give " + std::to_string(proto::kShortestDelayUs) + "-" +
+           std::to_string(proto::kLongestDelayUs) + " us";
+  }
+  const uint32_t rate = proto::step_rate(delay);
+  const std::string its_rate = who + " would step at " + std::to_string(rate) + " steps/s (" + std::to_string(delay) + " us a step)";
+  if (!homing) {
+    if (const std::optional<uint32_t> most = setting(move.motor, proto::kSettingMaxRate); most && rate > *most) {
+      return its_rate + ", above its max_rate setting of " + std::to_string(*most) + " steps/s: give a delay of " +
+             std::to_string(proto::step_rate(*most)) + " us or more (or raise it: SET " + std::to_string(move.motor) +
+             " " + std::to_string(proto::kSettingMaxRate) + " RATE)";
+    }
+  }
+  // The step interrupt's budget, shared by every moving motor: ask how fast the others go.
+  uint32_t sum = rate;
+  const uint32_t accel = homing ? 0 : setting(move.motor, proto::kSettingAccel).value_or(0);
+  bool ramping = accel != 0;
+  std::string others;
+  for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+    if (m == move.motor || model_.motor(m).state == MotorState::kIdle) continue;
+    if (SessionResult<BoardFrame> status = execute(StatusQuery{m}); !status) continue;
+    if (model_.motor(m).state == MotorState::kIdle) continue;
+    sum += model_.motor(m).rate;
+    ramping = ramping || setting(m, proto::kSettingAccel).value_or(0) != 0;
+    others += ", " + motor_name(m) + " at " + std::to_string(model_.motor(m).rate) + " now";
+  }
+  const uint32_t budget = proto::step_budget(ramping);
+  const std::string which = ramping ? "its budget while any moving motor ramps, " + std::to_string(budget) +
+                                          " steps/s (" + std::to_string(proto::kMaxStepRate) + " at constant rate)"
+                                    : "its budget of " + std::to_string(budget) + " steps/s";
+  if (others.empty()) {
+    if (rate > budget) {
+      return its_rate + (ramping ? " ramping (accel " + std::to_string(accel) + " steps/s^2)" : std::string()) +
+             ", above what the board can time: " + which + ": give a delay of " +
+             std::to_string(proto::step_rate(budget)) + " us or more" + (ramping ? ", or accel 0" : "");
+    }
+    return its_rate + " with an acceleration of " + std::to_string(accel) +
+           " steps/s^2: the board's step engine cannot plan that ramp: use a longer delay or another acceleration";
+  }
+  return its_rate + "; with the other moving motors (" + others.substr(2) + ") they would make " +
+         std::to_string(sum) + " steps/s or more together, above " + which +
+         ": use a longer delay, or wait for the other motors";
 }
 
 SessionResult<BoardFrame> Session::send_line(std::string_view line) {
@@ -486,21 +552,23 @@ SessionResult<Done> Session::wait(const std::function<bool()>& done, std::option
   }
 }
 
-SessionResult<Done> Session::stop_all() {
+SessionResult<Done> Session::stop_all() { return stop({1, 2, 3}); }
+
+SessionResult<Done> Session::stop(const std::vector<uint32_t>& motors) {
   // Stops go out first, all of them, then the replies are read: the motors halt together.
   std::vector<std::string> sent;
-  for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+  for (const uint32_t m : motors) {
     const StepperMove stop{m, proto::kActionStop, 0, 0, 0};
     const std::string frame = encode(stop, mode_).value();
     if (SessionResult<Done> written = write_line(frame, Command{stop}); !written) return written.error();
     sent.push_back(frame);
   }
-  for (uint32_t m = 1; m <= proto::kMotorCount && firmware_ == Firmware::kV2; ++m) {
-    SessionResult<BoardFrame> reply = await_reply(sent[m - 1]);
+  for (size_t i = 0; i < sent.size() && firmware_ == Firmware::kV2; ++i) {
+    SessionResult<BoardFrame> reply = await_reply(sent[i]);
     if (!reply) return reply.error();
   }
   if (firmware_ == Firmware::kV2) {
-    for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+    for (const uint32_t m : motors) {
       if (SessionResult<BoardFrame> status = execute(StatusQuery{m}); !status) return status.error();
     }
     // A motor with an acceleration brakes: its position is final only once its end event came.
@@ -563,6 +631,9 @@ SessionResult<Session::StreamReport> Session::stream(const std::vector<Command>&
   const size_t window = version_ && version_->line_max > 0 ? version_->line_max : proto::kLineMax;
   pending_replies_.clear();
   std::deque<size_t> waiting;  // indices of this stream's lines not yet answered, oldest first
+  std::vector<Reason> reasons_after;  // why each of report.refused_after was refused
+  std::optional<Reason> reason;       // why report.refused was
+  std::vector<bool> started(proto::kMotorCount, false);  // motors an accepted line set moving
   size_t next = 0;
   Clock::time_point last_reply = Clock::now();
   while ((!report.refused && next < lines.size()) || !waiting.empty()) {
@@ -585,14 +656,18 @@ SessionResult<Session::StreamReport> Session::stream(const std::vector<Command>&
       const size_t index = waiting.front();
       waiting.pop_front();
       if (const Nak* nak = std::get_if<Nak>(&reply)) {
+        // Explained once the stream is over: explaining may ask the board.
         if (!report.refused) {
           report.refused = index;
-          report.why = explain_refusal(nak->reason, &commands[index], model_);
+          reason = nak->reason;
         } else {
           report.refused_after.push_back(index);
+          reasons_after.push_back(nak->reason);
         }
       } else {
         ++report.accepted;
+        const auto* move = std::get_if<StepperMove>(&commands[index]);
+        if (move != nullptr && move->dir != proto::kActionStop) started[move->motor - 1] = true;
       }
     }
     if (!waiting.empty() && Clock::now() - last_reply > options_.reply_timeout) {
@@ -601,6 +676,24 @@ SessionResult<Session::StreamReport> Session::stream(const std::vector<Command>&
                             " ms while streaming (line " + std::to_string(waiting.front() + 1) + " of " +
                             std::to_string(lines.size()) + " unanswered)");
     }
+  }
+  if (!report.refused) return report;
+  // Explained while the board is as it was when it refused (a rate refusal asks it for numbers).
+  const auto why = [&](size_t index, Reason r) {
+    const auto* move = std::get_if<StepperMove>(&commands[index]);
+    return r == Reason::kRateLimit && move != nullptr ? explain_rate_limit(*move)
+                                                      : explain_refusal(r, &commands[index], model_);
+  };
+  report.why = why(*report.refused, *reason);
+  for (size_t i = 0; i < report.refused_after.size(); ++i) {
+    report.why_after.push_back(why(report.refused_after[i], reasons_after[i]));
+  }
+  // Giving up never leaves a motor running: what the stream started is stopped.
+  for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+    if (started[m - 1]) report.stopped.push_back(m);
+  }
+  if (!report.stopped.empty()) {
+    if (SessionResult<Done> stopped = stop(report.stopped); !stopped) return stopped.error();
   }
   return report;
 }
@@ -727,7 +820,9 @@ void Session::apply_sent(const Command& command) {
   seed.delay_us = std::max<uint32_t>(move->delay_us, 1);
   if (move->dir == proto::kActionHome) {
     m.state = MotorState::kHoming;
-    seed.end = move->steps > 0 ? now + seed_duration(move->steps, move->delay_us) : now + kSeedHomingTime;
+    // A delay of 0 seeks at home_seek_us, which the seed firmware does not let anyone change.
+    const uint32_t delay = move->delay_us != 0 ? move->delay_us : proto::kSettings[proto::kSettingHomeSeek - 1].initial;
+    seed.end = move->steps > 0 ? now + seed_duration(move->steps, delay) : now + kSeedHomingTime;
     return;
   }
   const int64_t units = static_cast<int64_t>(move->steps) * kUnitsPerStep / m.microstep;

@@ -68,6 +68,7 @@ struct SessionError {
     kLink,         // the port failed or the connection was lost
     kInterrupted,  // interrupted (Ctrl-C); every motor was sent a stop
     kTooOld,       // the board's firmware predates a feature asked for: reflash
+    kEnded,        // a motion ended early: a switch, the emergency switch, a stop, homing without its switch
   };
   Kind kind = Kind::kLink;
   std::string message;                        // in words, with what to do
@@ -161,8 +162,10 @@ class Session {
   // least every 50 ms): the general wait behind wait_until_idle, with the same interrupt, link
   // and silence handling. `done` may send commands through this session.
   SessionResult<Done> wait(const std::function<bool()>& done, std::optional<Millis> limit = {});
-  // Sends a stop to every motor (and, v2, waits for the replies).
+  // Sends a stop to every motor (and, v2, waits for the replies and until they rest).
   SessionResult<Done> stop_all();
+  // The same for some motors.
+  SessionResult<Done> stop(const std::vector<uint32_t>& motors);
   // Reads and handles what the board sends for `duration`, or until interrupted.
   SessionResult<Done> listen(Millis duration);
 
@@ -172,7 +175,8 @@ class Session {
   // it can never overflow) — the link never waits for a reply. The commands are checked
   // against the protocol's ranges before anything is sent; the board's rules are the board's to
   // apply while streaming. At the first refusal nothing more is sent, the lines already on
-  // their way are answered and counted, and the report says which line was refused and why.
+  // their way are answered and counted, every motor the stream had started is stopped (giving up
+  // never leaves one running), and the report says which lines were refused and why.
   // With the seed firmware, one line at a time, each after the previous one's wire time.
   struct StreamReport {
     size_t sent = 0;       // lines written
@@ -180,6 +184,8 @@ class Session {
     std::optional<size_t> refused;  // index of the first refused command
     std::string why;       // its refusal, explained
     std::vector<size_t> refused_after;  // lines sent after it that the board refused too
+    std::vector<std::string> why_after;  // why, for each of refused_after
+    std::vector<uint32_t> stopped;       // after a refusal: the motors the stream had started
   };
   SessionResult<StreamReport> stream(const std::vector<Command>& commands, bool pipelined = true);
 
@@ -193,6 +199,9 @@ class Session {
   SessionResult<BoardFrame> await_reply(std::string_view sent);
   // Reads for at most `timeout`; returns frames decoded in that time (events handled).
   SessionResult<std::vector<BoardFrame>> pump(Millis timeout);
+  // A rate_limit refusal of `move` in words, with the limit it broke and the numbers (the
+  // board's settings and the other motors' rates, asked with GET and STA).
+  std::string explain_rate_limit(const StepperMove& move);
   void apply(const BoardFrame& frame);
   void apply_sent(const Command& command);
   void settle_seed_motions();
@@ -242,6 +251,10 @@ class Session {
 // The board's refusal in words, with what to do: "motor 1's switch at the forward end is pressed:
 // move it the other way (or home it)".
 std::string explain_refusal(proto::Reason reason, const Command* command, const BoardModel& model);
+
+// Why a homing that ended without its switch did: "the emergency switch stopped it" or "the
+// switch was not found".
+std::string not_homed_cause(const BoardModel& model);
 
 // A motor's position in full steps, for people: 819200 (1/256 step) -> "3200", 64 -> "0.25".
 std::string steps_text(int64_t position);
