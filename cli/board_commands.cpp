@@ -156,42 +156,46 @@ void add_send(CLI::App& app, const GlobalOptions& g, int& exit_code) {
       exit_code = usage_error(g, "--raw takes the line as one argument (quote it)");
       return;
     }
-    run_on_board(g, exit_code, [&](Session& s) {
-      SessionResult<BoardFrame> reply = BoardFrame{Ack{}};
-      if (o->raw) {
-        // Each line is answered on its own (a blank one not at all): one reply shown per line.
-        for (const std::string& line : raw_lines(o->first)) {
-          if (is_blank(line) && s.firmware() == Firmware::kV2) {
-            if (SessionResult<BoardFrame> sent = s.send_line(line); !sent) return report_error(g, sent.error());
-            if (g.json) {
-              std::cout << nlohmann::json{{"reply", nullptr}} << '\n';
-            } else {
-              std::cout << "sent a blank line: the board answers nothing to it (it only feeds the link watchdog)\n";
-            }
-            continue;
-          }
-          SessionResult<BoardFrame> answered = s.send_line(line);
-          if (!answered) return report_error(g, answered.error());
-          show_reply(g, s, *answered);
+    // A command (not --raw) is read and checked before the port opens: a mistake sends nothing.
+    std::optional<Command> command;
+    if (!o->raw) {
+      std::vector<std::string> words{o->first};
+      words.insert(words.end(), o->values.begin(), o->values.end());
+      Result<Command, Diagnostic> parsed = o->values.empty() ? command_from_text(o->first) : command_from_words(words);
+      if (parsed) parsed = validate(*parsed);
+      if (!parsed) {
+        if (g.json) {
+          report_error(g, SessionError{SessionError::Kind::kInvalid, parsed.error().message, parsed.error().reason});
+        } else {
+          print_refusal(std::cerr, o->values.empty() ? o->first : "", parsed.error());
         }
-        return static_cast<int>(kExitOk);
-      } else {
-        std::vector<std::string> words{o->first};
-        words.insert(words.end(), o->values.begin(), o->values.end());
-        Result<Command, Diagnostic> command =
-            o->values.empty() ? command_from_text(o->first) : command_from_words(words);
-        if (!command) {
-          if (g.json) {
-            report_error(g, SessionError{SessionError::Kind::kInvalid, command.error().message, command.error().reason});
-          } else {
-            print_refusal(std::cerr, o->values.empty() ? o->first : "", command.error());
-          }
-          return static_cast<int>(kExitInvalid);
-        }
-        reply = s.execute(*command);
+        exit_code = kExitInvalid;
+        return;
       }
-      if (!reply) return report_error(g, reply.error());
-      show_reply(g, s, *reply);
+      command = *parsed;
+    }
+    run_on_board(g, exit_code, [&](Session& s) {
+      if (command) {
+        SessionResult<BoardFrame> reply = s.execute(*command);
+        if (!reply) return report_error(g, reply.error());
+        show_reply(g, s, *reply);
+        return static_cast<int>(kExitOk);
+      }
+      // Each line is answered on its own (a blank one not at all): one reply shown per line.
+      for (const std::string& line : raw_lines(o->first)) {
+        if (is_blank(line) && s.firmware() == Firmware::kV2) {
+          if (SessionResult<BoardFrame> sent = s.send_line(line); !sent) return report_error(g, sent.error());
+          if (g.json) {
+            std::cout << nlohmann::json{{"reply", nullptr}} << '\n';
+          } else {
+            std::cout << "sent a blank line: the board answers nothing to it (it only feeds the link watchdog)\n";
+          }
+          continue;
+        }
+        SessionResult<BoardFrame> answered = s.send_line(line);
+        if (!answered) return report_error(g, answered.error());
+        show_reply(g, s, *answered);
+      }
       return static_cast<int>(kExitOk);
     });
   });

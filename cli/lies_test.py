@@ -63,6 +63,8 @@ def run_cell(cell, board, during, args, want_exit, wording, after):
         sim_proc, port, cport = start_sim(extra)
     elif board == "sim":
         port = "sim://lies-" + cell
+    elif board == "missing-port":
+        port = "/dev/hmc-lies-no-such-port"
     elif board == "silent-pty":
         master, slave = pty.openpty()
         port, keep = os.ttyname(slave), (master, slave)
@@ -81,14 +83,17 @@ def run_cell(cell, board, during, args, want_exit, wording, after):
             if item.startswith("then:"):
                 then = shlex.split(item[len("then:"):])
             elif item != "none":
-                inject = item.split("@")
+                inject = item.split("@", 1)
         t0 = time.monotonic()
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env, cwd=work)
         if inject:
             what, at = inject
+            at, _, words = at.partition(":")
             time.sleep(int(at) / 1000)
             if what == "estop":
                 control(cport, "estop")
+            elif what == "ctl":
+                control(cport, words)
             elif what == "simkill":
                 sim_proc.kill()
             elif what == "simstop":

@@ -102,8 +102,9 @@ std::string explain_refusal(Reason reason, const Command* command, const BoardMo
       return "the board keeps the seed's rule: servo and LED commands are ignored while a stepper runs; wait "
              "until it stops (`hmc move ... --wait`)";
     case Reason::kRateLimit:
-      return "the moving motors together would step faster than the board can time (its budget is the sum of "
-             "their rates): use a longer delay, or wait for the other motors";
+      // Session::explain_rate_limit names the limit with numbers, asking the board for them.
+      return "the step rate is beyond what the board can time (its delay range, the motor's max_rate, or its "
+             "budget for the moving motors together): use a longer delay, or wait for the other motors";
     case Reason::kSoftLimit:
       return (move != nullptr ? motor_name(move->motor) + "'s" : std::string("the motor's")) +
              " move would end outside its soft travel limits (LIM)";
@@ -491,8 +492,13 @@ SessionResult<BoardFrame> Session::send_line(std::string_view line) {
   SessionResult<BoardFrame> reply = await_reply(text);
   if (!reply) return reply;
   if (const Nak* nak = std::get_if<Nak>(&reply.value())) {
+    const StepperMove* move = decoded ? std::get_if<StepperMove>(&decoded->command) : nullptr;
+    const Reason reason = nak->reason;
     return make_error(SessionError::Kind::kNak,
-                      explain_refusal(nak->reason, decoded ? &decoded->command : nullptr, model_) + " (token " +
+                      (reason == Reason::kRateLimit && move != nullptr
+                           ? explain_rate_limit(*move)
+                           : explain_refusal(reason, decoded ? &decoded->command : nullptr, model_)) +
+                          " (token " +
                           std::to_string(nak->token) + ", byte " + std::to_string(nak->offset) + ")",
                       nak->reason);
   }
@@ -648,7 +654,8 @@ SessionResult<Session::StreamReport> Session::stream(const std::vector<Command>&
       waiting.push_back(next++);
       ++report.sent;
     }
-    if (SessionResult<std::vector<BoardFrame>> got = pump(Millis{5}); !got) return got.error();
+    // A board that stops answering or a link that fails mid-stream: the motors are sent a stop.
+    if (SessionResult<std::vector<BoardFrame>> got = pump(Millis{5}); !got) return stopping(got.error());
     if (!pending_replies_.empty()) last_reply = Clock::now();
     while (!pending_replies_.empty() && !waiting.empty()) {
       const BoardFrame reply = pending_replies_.front();
@@ -671,10 +678,10 @@ SessionResult<Session::StreamReport> Session::stream(const std::vector<Command>&
       }
     }
     if (!waiting.empty() && Clock::now() - last_reply > options_.reply_timeout) {
-      return make_error(SessionError::Kind::kNoReply,
+      return stopping(make_error(SessionError::Kind::kNoReply,
                         "no reply from the board within " + std::to_string(options_.reply_timeout.count()) +
                             " ms while streaming (line " + std::to_string(waiting.front() + 1) + " of " +
-                            std::to_string(lines.size()) + " unanswered)");
+                            std::to_string(lines.size()) + " unanswered); every motor was sent a stop"));
     }
   }
   if (!report.refused) return report;
