@@ -57,8 +57,7 @@ std::string seed_result_words(Motion motion, const MotorStatus& motor) {
   constexpr const char* kSent = "sent; the original firmware confirms nothing";
   switch (motion) {
     case Motion::kMove:
-      return std::string(kSent) + " (if it obeyed, it is " + steps_text(motor.position * motor.microstep) +
-             " steps of 1/" + std::to_string(motor.microstep) + " from where this hmc found it)";
+      return std::string(kSent) + " (if it obeyed, it is " + seed_position_words(motor) + ")";
     case Motion::kHome:
       return std::string("home ") + kSent + " (if it obeyed, it found its switch within the steps given)";
     case Motion::kStop:

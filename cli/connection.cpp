@@ -185,6 +185,11 @@ std::string position_words(const MotorStatus& m) {
          steps_text(m.position) + " full steps)";
 }
 
+std::string seed_position_words(const MotorStatus& m) {
+  return steps_text(m.position * m.microstep) + " steps of 1/" + std::to_string(m.microstep) +
+         " from where this hmc found it";
+}
+
 nlohmann::json motor_to_json(const MotorStatus& m, const std::optional<MotionEnd>& last_end) {
   // Steps of the microstep: a whole number, unless the position falls between two of them.
   const int64_t units = static_cast<int64_t>(m.position) * m.microstep;

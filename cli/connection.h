@@ -57,5 +57,7 @@ nlohmann::json motor_to_json(const MotorStatus& motor, const std::optional<Motio
 
 // "a: 3200 steps of 1/16 (200 full steps)" for people.
 std::string position_words(const MotorStatus& motor);
+// The seed firmware reports no positions: "400 steps of 1/16 from where this hmc found it".
+std::string seed_position_words(const MotorStatus& motor);
 
 }  // namespace hmc::cli

@@ -157,7 +157,7 @@ def run_cell(cell, board, during, args, want_exit, wording, after):
 failures = 0
 cells = 0
 start = time.monotonic()
-for line in open(os.path.join(src, "cli", "testdata", "lies.txt")):
+for line in open(os.path.join(src, "cli", "testdata", "lies.txt")).read().splitlines():
     if not line.strip() or line.startswith("#"):
         continue
     fields = [f.strip() for f in line.split(" | ")]

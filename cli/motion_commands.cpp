@@ -399,6 +399,13 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     }
     if (g.json) {
       std::cout << nlohmann::json{{"completed", report.completed}, {"state", model_to_json(*session)}} << '\n';
+    } else if (session->firmware() == Firmware::kSeed) {
+      // Nothing came back: what was sent, and where the motors are only if the board obeyed.
+      std::cout << "sent every step (" << report.completed << "); the original firmware confirms nothing";
+      for (const motion::MotorTrack& t : plan->tracks) {
+        std::cout << "; if it obeyed, " << t.name << " is " << seed_position_words(session->model().motor(t.motor));
+      }
+      std::cout << '\n';
     } else {
       std::cout << "done: " << report.completed << " steps";
       for (const motion::MotorTrack& t : plan->tracks) {
