@@ -169,5 +169,18 @@ for line in open(os.path.join(src, "cli", "testdata", "lies.txt")).read().splitl
         failures += 1
         print("FAIL %s: %s\n  hmc %s\n  output: %s" % (fields[0], "; ".join(problems), fields[3],
                                                       text.strip().replace("\n", "\n          ")))
+# docs/cli.md's exit-code table is the contract: each of its codes is some cell's expected exit.
+if not os.environ.get("LIES_CELLS"):
+    docs = open(os.path.join(src, "docs", "cli.md")).read()
+    table = docs.split("## Exit codes", 1)[1].split("\n## ", 1)[0]
+    documented = set(re.findall(r"^\| (\d+) \|", table, re.M))
+    expected = {l.split(" | ")[4].strip() for l in open(os.path.join(src, "cli", "testdata", "lies.txt")).read().splitlines()
+                if l.strip() and not l.startswith("#")}
+    for code in sorted(documented - expected, key=int):
+        failures += 1
+        print("FAIL docs/cli.md's exit code %s has no cell in cli/testdata/lies.txt" % code)
+    if len(documented) < 7:
+        failures += 1
+        print("FAIL docs/cli.md's exit-code table was not found (%s)" % sorted(documented))
 print("lies_test: %d cells, %d failed (%.1f s)" % (cells, failures, time.monotonic() - start))
 sys.exit(1 if failures else 0)

@@ -195,8 +195,10 @@ class Session {
   SessionResult<Done> detect_firmware();
   // Sends a line; `command` is what it carries, applied to the model once accepted.
   SessionResult<Done> write_line(const std::string& line, std::optional<Command> command);
-  // The next reply (non-event frame), handling events on the way.
-  SessionResult<BoardFrame> await_reply(std::string_view sent);
+  // The reply to line number `line` (lines_written_ once it was sent), handling events on the
+  // way; replies to earlier lines nobody waits for any more (an interrupted stream's, a late one)
+  // are passed over, never taken for its answer.
+  SessionResult<BoardFrame> await_reply(std::string_view sent, uint64_t line);
   // Reads for at most `timeout`; returns frames decoded in that time (events handled).
   SessionResult<std::vector<BoardFrame>> pump(Millis timeout);
   // A rate_limit refusal of `move` in words, with the limit it broke and the numbers (the
@@ -232,10 +234,16 @@ class Session {
   struct InFlight {
     std::optional<Command> command;  // what the line carries, when it decoded
     size_t bytes = 0;                // its length on the wire, line end included
+    uint64_t line = 0;               // its number: the replies come in the lines' order
   };
   std::deque<InFlight> in_flight_;  // lines sent, oldest first, awaiting replies
   size_t in_flight_bytes_ = 0;
-  std::vector<BoardFrame> pending_replies_;       // replies read, not yet taken
+  uint64_t lines_written_ = 0;      // lines that get a reply, sent so far
+  struct Reply {
+    uint64_t line = 0;  // the line it answers; 0: none was in flight (it belongs to nobody)
+    BoardFrame frame;
+  };
+  std::deque<Reply> pending_replies_;  // replies read, not yet taken
   bool rebooted_ = false;                     // EVB seen since the last wait began
   bool detecting_ = false;                    // open(): the board's checksum mode is not known yet
   // The keep-alive thread shares the transport: every read and write holds this.
