@@ -366,19 +366,42 @@ void add_move(CLI::App& app, const GlobalOptions& g, int& exit_code) {
       exit_code = profile.error();
       return;
     }
-    if (Result<Axis> known = resolve_axis(o->axis, *profile, BoardModel{}, o->steps_per_rev); !known) {
+    Result<Axis> known = resolve_axis(o->axis, *profile, BoardModel{}, o->steps_per_rev);
+    if (!known) {
       exit_code = usage_error(g, known.error().message);
       return;
-    } else if (!o->to && !o->by) {
-      // The frame's values, as far as they do not depend on the board (its current microstep).
+    }
+    // The rest of the command line too, as far as it does not depend on where the motor is.
+    const auto mistake = [&]() -> std::optional<std::string> {
+      if (o->to || o->by) {
+        if (o->steps || o->degrees || o->revolutions || o->run || o->delay_us || o->rate || o->microstep || o->reverse) {
+          return "--to and --by take the axis's microstep and --speed: no STEPS, --deg, --rev, --run, --delay, --rate, "
+                 "--microstep or --reverse with them";
+        }
+        Result<UnitMove> planned =
+            unit_move(*known, BoardModel{}.motor(known->motor), UnitMoveRequest{o->to, o->by, o->speed, o->accel});
+        if (!planned) return planned.error().message;
+        return std::nullopt;
+      }
+      if (o->speed) return "--speed goes with --to or --by; give STEPS with --delay or --rate";
       MoveOptions given = *o;
       given.motor = known->motor;
       Result<StepperMove> move = move_command(given, o->microstep.value_or(known->microstep));
-      if (!move) {
-        exit_code = usage_error(g, move.error().message);
-        return;
+      if (!move) return move.error().message;
+      if (Result<Command, Diagnostic> valid = validate(*move); !valid) return valid.error().message;
+      if (o->accel) {
+        std::vector<std::string> notes;
+        Result<uint32_t> steps = accel_steps(*known, *o->accel, notes);
+        if (!steps) return steps.error().message;
+        if (Result<Command, Diagnostic> valid = validate(SetSetting{known->motor, proto::kSettingAccel, *steps}); !valid) {
+          return "--accel: " + valid.error().message;
+        }
       }
-      if (!command_line_valid(g, *move, exit_code)) return;
+      return std::nullopt;
+    }();
+    if (mistake) {
+      exit_code = usage_error(g, *mistake);
+      return;
     }
     run_on_board(g, exit_code, [&](Session& s) {
       Result<Axis> axis = resolve_axis(o->axis, profile_in_use(g), s.model(), o->steps_per_rev);
@@ -388,10 +411,6 @@ void add_move(CLI::App& app, const GlobalOptions& g, int& exit_code) {
       std::optional<uint32_t> accel;
       Result<StepperMove> move = Error{""};
       if (o->to || o->by) {
-        if (o->steps || o->degrees || o->revolutions || o->run || o->delay_us || o->rate || o->microstep || o->reverse) {
-          return usage_error(g, "--to and --by take the axis's microstep and --speed: no STEPS, --deg, --rev, --run, "
-                                "--delay, --rate, --microstep or --reverse with them");
-        }
         Result<UnitMove> planned = unit_move(*axis, s.model().motor(axis->motor), UnitMoveRequest{o->to, o->by, o->speed, o->accel});
         if (!planned) return usage_error(g, planned.error().message);
         if (std::optional<std::string> refused = beyond_soft_limits(*axis, s.model().motor(axis->motor), planned->target)) {
@@ -407,7 +426,6 @@ void add_move(CLI::App& app, const GlobalOptions& g, int& exit_code) {
         move = *planned->move;
         if (!planned->delay_us) move->delay_us = kDefaultDelayUs;
       } else {
-        if (o->speed) return usage_error(g, "--speed goes with --to or --by; give STEPS with --delay or --rate");
         if (!o->microstep) o->microstep = axis->microstep;
         if (o->accel) {
           Result<uint32_t> steps = accel_steps(*axis, *o->accel, notes);
@@ -745,7 +763,7 @@ void add_monitor(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   auto seconds = std::make_shared<double>(0);
   CLI::App* cmd = app.add_subcommand("monitor", "show every reply and event the board sends, decoded, with times");
   cmd->add_option("--duration", *seconds, "stop after this many seconds (default: until Ctrl-C)")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
   cmd->callback([&g, &exit_code, seconds] {
     // Lines are shown as the session reads them, from when it is open (not its own queries).
     auto started = std::make_shared<Clock::time_point>();

@@ -3,6 +3,7 @@
 
 #include <signal.h>
 
+#include <cstdlib>
 #include <iostream>
 
 #include "axis_units.h"
@@ -99,6 +100,17 @@ void add_global_options(CLI::App& app, GlobalOptions& o) {
 }
 
 bool interrupt_requested() { return g_interrupted != 0; }
+
+CLI::Validator positive_number() {
+  return CLI::Validator(
+      [](const std::string& text) {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        const bool number = !text.empty() && end != nullptr && *end == '\0';
+        return number && value > 0 ? std::string() : "must be a number above 0, not '" + text + "'";
+      },
+      "NUMBER > 0");
+}
 
 SessionResult<Done> watch_link(Session& s, const GlobalOptions& o) {
   // sim://'s board runs only inside hmc: when hmc dies its time stops too, so nothing runs on
