@@ -52,6 +52,8 @@ std::optional<Plan> load_and_plan(const std::string& path, const motion::PlanOpt
     failure = std::ifstream(path) ? kExitInvalid : kExitIo;
     return std::nullopt;
   }
+  // Values rounded to a whole step are no mistake, but the user should know where they are.
+  for (const motion::FileError& n : file->notes) std::cerr << "note: " << n.text() << '\n';
   auto plan = motion::plan_motion(*file, options);
   if (!plan) {
     print_errors(plan.error(), json);

@@ -21,6 +21,11 @@ for f in "$src"/examples/*.json; do
   [[ $out == *": valid: "* ]] || fail "check $f says: $out"
 done
 
+# A value in mm that is no whole number of steps is rounded, and the check says where.
+out=$("$hmc" check "$src/examples/camera-slider-mm.json" 2>&1 >/dev/null)
+grep -q '^note: .*camera-slider-mm.json:16:46: .*12.3456 mm is 987.648 steps: rounded to 988$' <<<"$out" ||
+  fail "check names no rounding: $out"
+
 out=$("$hmc" plan "$src/examples/pan-tilt-scan.json" --plot "$work/plot.svg" --csv "$work/plot.csv" 2>&1) ||
   fail "plan: $out"
 grep -q '<svg' "$work/plot.svg" || fail "plan --plot wrote no SVG"

@@ -23,6 +23,9 @@ fail() {
 # Starts hmc-sim on a free TCP port with a trace in $work/trace.jsonl (extra options are passed
 # on); sets $port.
 start_sim() {
+  # Emptied here, not only by the redirection below: that runs in the child, and until it does
+  # the file still names the last simulator's port.
+  : >"$work/sim.err"
   "$sim" --tcp 127.0.0.1:0 --no-self-test --trace "$work/trace.jsonl" "$@" 2>"$work/sim.err" &
   sim_pid=$!
   port=

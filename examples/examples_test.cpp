@@ -75,7 +75,7 @@ std::vector<ReceivedMove> received_moves(const Trace& trace) {
   return moves;
 }
 
-void run_example(const std::string& name) {
+motion::Plan run_example(const std::string& name) {
   INFO("example " << name);
   const std::string dir = std::filesystem::temp_directory_path() / ("hmc-examples-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
@@ -144,6 +144,7 @@ void run_example(const std::string& name) {
     std::vector<uint64_t> ends;
     uint64_t longest_period = 0;
     for (const std::vector<motion::Stage>& motor_stages : a.stages) {
+      if (motor_stages.empty()) continue;  // a move that ends on the step it starts from sends nothing
       size_t at = cursor;
       size_t last_at = 0;
       for (const motion::Stage& stage : motor_stages) {
@@ -174,6 +175,7 @@ void run_example(const std::string& name) {
     INFO("coordinated step " << a.index << ": " << a.description);
     CHECK(*hi - *lo <= longest_period);
   }
+  return std::move(*plan);
 }
 
 }  // namespace
@@ -182,4 +184,24 @@ TEST_CASE("pan-tilt scan") { run_example("pan-tilt-scan.json"); }
 TEST_CASE("camera slider") { run_example("camera-slider.json"); }
 TEST_CASE("home then together") { run_example("home-then-together.json"); }
 TEST_CASE("light show") { run_example("light-show.json"); }
+// In millimetres through camera-slider.toml (80 steps per mm): the board ends at exactly the
+// steps the millimetres come to, counted from exact ends, not from each rounded move.
+TEST_CASE("camera slider in millimetres") {
+  const motion::Plan plan = run_example("camera-slider-mm.json");
+  REQUIRE(plan.tracks.size() == 1);
+  CHECK(plan.tracks[0].name == "slide");
+  CHECK(plan.tracks[0].end_position == 988);  // 12.3456 mm = 987.648 steps
+  int64_t position = 0;
+  std::vector<int64_t> ends;
+  for (const motion::Action& a : plan.actions) {
+    for (const auto& stages : a.stages) {
+      for (const motion::Stage& s : stages) position += (s.dir == proto::kActionForward ? 1 : -1) * int64_t{s.steps};
+    }
+    if (a.kind == motion::ActionKind::kMove) ends.push_back(position);
+  }
+  REQUIRE(ends.size() == 52);
+  CHECK(ends[0] == 20000);       // 250 mm
+  CHECK(ends[50] == 20000 - 40); // 50 x 0.8 steps back: 40, not 50
+  CHECK(ends[51] == 988);
+}
 TEST_CASE("stress: short moves") { run_example("stress-short-moves.json"); }

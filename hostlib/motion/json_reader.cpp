@@ -130,14 +130,49 @@ class Reader {
     return false;
   }
 
+  // Blanks and comments: `// to the end of the line` and `/* to the closing */`, which motion
+  // files allow (choreographies want them) though JSON does not. A '/' that starts neither is
+  // left for the caller to refuse as it would any other byte.
   void skip_blanks() {
-    while (!at_end() && is_blank(text_[pos_])) {
-      if (text_[pos_] == '\n') {
-        ++line_;
-        line_start_ = pos_ + 1;
+    while (!at_end()) {
+      const char c = text_[pos_];
+      if (is_blank(c)) {
+        advance();
+      } else if (c == '/' && pos_ + 1 < text_.size() && text_[pos_ + 1] == '/') {
+        while (!at_end() && text_[pos_] != '\n') advance();
+      } else if (c == '/' && pos_ + 1 < text_.size() && text_[pos_ + 1] == '*') {
+        const Position start = here();
+        pos_ += 2;
+        while (!at_end() && text_.substr(pos_, 2) != "*/") advance();
+        if (at_end()) {
+          fail(start, "'*/' closing the comment", "a comment opened with '/*' is never closed");
+          return;
+        }
+        pos_ += 2;
+      } else {
+        return;
       }
-      ++pos_;
     }
+  }
+
+  // One byte on, counting lines.
+  void advance() {
+    if (text_[pos_] == '\n') {
+      ++line_;
+      line_start_ = pos_ + 1;
+    }
+    ++pos_;
+  }
+
+  // After a ',' in an object or array: a closing bracket there is a trailing comma, which JSON
+  // does not allow (though editors' own formats do), so it gets a message of its own. It is
+  // reported where the missing value or key belongs, as any other missing one is.
+  bool trailing_comma(const Position& comma, char close, const std::string& expected) {
+    if (peek() != close) return false;
+    fail(here(), expected,
+         "trailing comma: the ',' at line " + std::to_string(comma.line) + ", column " + std::to_string(comma.column) +
+             " is followed by '" + close + "'; remove it");
+    return true;
   }
 
   bool value(Value& out, int depth) {
@@ -225,7 +260,10 @@ class Reader {
 
       skip_blanks();
       if (peek() == ',') {
+        const Position comma = here();
         ++pos_;
+        skip_blanks();
+        if (trailing_comma(comma, '}', "a key in double quotes")) return false;
         continue;
       }
       if (peek() == '}') {
@@ -254,7 +292,13 @@ class Reader {
       if (!ok) return false;
       skip_blanks();
       if (peek() == ',') {
+        const Position comma = here();
         ++pos_;
+        skip_blanks();
+        segments_.push_back({false, {}, out.items.size()});
+        const bool trailing = trailing_comma(comma, ']', "a value (object, array, string, number, true, false or null)");
+        segments_.pop_back();
+        if (trailing) return false;
         continue;
       }
       if (peek() == ']') {

@@ -1,6 +1,7 @@
 // A small JSON reader that remembers where every value and key is (line, column, byte span), so
 // a validator can point at the exact spot of a mistake. Internal to the host library (motion
-// files use it); strict RFC 8259 JSON in UTF-8, numbers as double.
+// files use it); RFC 8259 JSON in UTF-8, numbers as double, plus `//` and `/* */` comments
+// (choreographies want them). A trailing comma is refused with a message that says so.
 //
 // Nesting is limited (kMaxDepth) so hostile input cannot exhaust the stack. A duplicate key in an
 // object is not a syntax error: it is reported in Document::duplicates and the first value is

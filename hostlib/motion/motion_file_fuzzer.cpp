@@ -13,7 +13,10 @@
 //     with a speed in range and a profile that fits its acceleration; repeat counts 1-100 000
 //     and at most 1 000 000 steps unrolled; servo, strip and colour values in range;
 //   - plan_motion() (PlanOptions{}, every start position 0) returns, and a refusal has errors,
-//     for accepted files of at most kPlanLimit unrolled steps (longer ones only cost time).
+//     for accepted files of at most kPlanLimit unrolled steps (longer ones only cost time);
+//   - notes (values rounded to a whole step) have a location as errors do.
+// A file that names a profile ("profile": any name) gets kProfile, a rig with a linear axis and
+// an inverted rotary one, so the profile's units and directions are fuzzed without the disk.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -34,6 +37,34 @@ using hmc::fuzz::require;
 using namespace hmc::motion;
 
 constexpr uint64_t kPlanLimit = 2000;
+
+constexpr const char* kProfile = R"(
+[axis.slide]
+motor = 1
+pulley_teeth = 20
+belt_pitch = "2mm"
+limits = ["0mm", "310mm"]
+speed = "50mm/s"
+accel = "200mm/s2"
+
+[axis.tilt]
+motor = 2
+gear_ratio = 2
+rotary = true
+invert = true
+limits = ["-180deg", "0deg"]
+
+[axis.z]
+motor = 3
+microstep = 4
+screw_lead = "8mm"
+)";
+
+hmc::Result<hmc::Profile, std::string> fuzz_profile(const std::string&, const std::string&) {
+  static const auto profile = hmc::parse_profile(kProfile, "fuzz.toml");
+  if (!profile) return std::string("the fuzz profile has mistakes: ") + profile.error().text();
+  return profile.value();
+}
 
 struct Checker {
   std::string_view input;
@@ -188,13 +219,16 @@ void check_errors(std::string_view input, const std::vector<FileError>& errors) 
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
-  const auto parsed = parse_motion_file(text, "fuzz.json");
+  ReadOptions read;
+  read.load_profile = fuzz_profile;
+  const auto parsed = parse_motion_file(text, "fuzz.json", read);
   if (!parsed) {
     check_errors(text, parsed.error());
     return 0;
   }
   const MotionFile& file = parsed.value();
   const uint64_t unrolled = Checker{text, file}.all();
+  for (const FileError& n : file.notes) Checker{text, file}.location(n.where, "note");
   if (unrolled > kPlanLimit) return 0;
 
   PlanOptions options;

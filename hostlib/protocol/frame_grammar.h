@@ -17,6 +17,10 @@
 
 namespace hmc::grammar {
 
+// A frame begins and ends with these.
+constexpr std::string_view kStart = "STX";
+constexpr std::string_view kEnd = "ETX";
+
 // What the grammar needs of one kind of frame: a CommandSpec or a BoardFrameSpec.
 struct Shape {
   std::string_view name;

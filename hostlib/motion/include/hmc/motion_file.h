@@ -6,14 +6,22 @@
 // expected and what was found. Distances and speeds are converted here, once, into the units
 // the board counts: steps at the motor's microstep, steps/s, steps/s², steps/s³. Ranges are
 // checked against the board's rules, soft travel limits included (those a file declares).
+//
+// A file may name the machine profile it was written for (profile.h, docs/config.md): its
+// motors are then the profile's axes, by name, in the axes' units (mm, mm/s, mm/s² on a linear
+// axis; deg on a rotary one), direction and soft limits. When a file has mistakes, the ones that
+// planning finds (a `to` before the position is known, a `by` beyond a soft limit) are reported
+// with them, as far as the broken steps allow: the whole file is checked in one pass.
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <variant>
 #include <vector>
 
+#include "hmc/profile.h"
 #include "hmc/result.h"
 
 namespace hmc::motion {
@@ -74,6 +82,10 @@ struct Move {
   std::string motor;      // a name from "motors"
   double distance = 0;    // relative steps (signed), or the target with `absolute`
   bool absolute = false;  // distance is a position from home
+  // The distance or position in steps before rounding, when it is not a whole step (a millimetre
+  // or degree between steps). Planning counts the end of a relative move from the exact end of
+  // the one before, so that roundings never add up beyond half a step.
+  std::optional<double> exact;
   Profile profile;
   Location where;
 };
@@ -126,15 +138,29 @@ struct MotionFile {
   int version = kFormatVersion;
   std::string path;
   std::string name;  // optional "name"
+  std::string profile;  // the machine profile's file, when the file names one ("profile")
   std::vector<MotorConfig> motors;
   std::vector<Step> steps;
+  // What is worth saying though it is no mistake: each value rounded to a whole step, where it is.
+  std::vector<FileError> notes;
 
   const MotorConfig* motor(const std::string& name) const;
 };
 
-// Parses and validates `text` (from `path`, used in messages). All errors, in file order.
-Result<MotionFile, std::vector<FileError>> parse_motion_file(const std::string& text, const std::string& path);
+struct ReadOptions {
+  // The profile of a file that names none and declares no "motors" (a program's chosen profile).
+  const hmc::Profile* profile = nullptr;
+  // Loads the profile a file names (its "profile", and the motion file's path); empty: the
+  // named file, relative to the motion file's folder, with load_profile(). An error is a sentence.
+  std::function<Result<hmc::Profile, std::string>(const std::string& name, const std::string& motion_file)>
+      load_profile;
+};
+
+// Parses and validates `text` (from `path`, used in messages and to find a named profile). All
+// errors, in file order.
+Result<MotionFile, std::vector<FileError>> parse_motion_file(const std::string& text, const std::string& path,
+                                                             const ReadOptions& options = {});
 // Reads the file, then parse_motion_file(); an unreadable file is one error.
-Result<MotionFile, std::vector<FileError>> load_motion_file(const std::string& path);
+Result<MotionFile, std::vector<FileError>> load_motion_file(const std::string& path, const ReadOptions& options = {});
 
 }  // namespace hmc::motion
