@@ -143,7 +143,7 @@ install(CODE "
                             \"\$ENV{DESTDIR}\${CMAKE_INSTALL_PREFIX}/${CMAKE_INSTALL_LIBDIR}/$<TARGET_FILE_NAME:hmc>\"
                     COMMAND_ERROR_IS_FATAL ANY)
   endif()" COMPONENT libhmc-dev)
-foreach(module protocol link session motion profile)
+foreach(module protocol link session motion profile grbl)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/hostlib/${module}/include/hmc DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
           COMPONENT libhmc-dev)
 endforeach()

@@ -11,6 +11,7 @@
 #include <cinttypes>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <optional>
 
@@ -56,6 +57,7 @@ struct Options {
   bool run_fault_handler = false;
   bool quiet = false;
   bool stats = false;
+  double measure_from_s = 0;  // --stats counts from this virtual time on
   // Start in the bootloader (docs/emu.md, "Flashing"): the native USB port, the UF2 drive.
   std::string usb_pty;
   std::string uf2_drive;
@@ -142,6 +144,27 @@ class Emulator {
 
   uint64_t now_ps() const { return time_offset_ps_ + machine_.chip->now_ps(); }
 
+  // What --stats reports: the figures since the measurement began (--measure-from).
+  struct Snapshot {
+    uint64_t ps = 0;
+    uint64_t cycles = 0;
+    uint64_t instructions = 0;
+    uint64_t flash_wait_cycles = 0;
+    std::map<unsigned, Cpu::HandlerFigures> handlers;
+    uint64_t steps[3] = {};
+  };
+  Snapshot snapshot() const {
+    Snapshot s;
+    s.ps = now_ps();
+    s.cycles = machine_.chip->cycles();
+    s.instructions = machine_.cpu->instructions();
+    s.flash_wait_cycles = machine_.cpu->flash_wait_cycles();
+    s.handlers = machine_.cpu->handler_figures();
+    for (unsigned m = 0; m < 3; ++m) s.steps[m] = machine_.chip->board().axis(m).steps;
+    return s;
+  }
+  const Snapshot& measure_start() const { return measure_start_; }
+
   int run() {
     const auto origin = std::chrono::steady_clock::now();
     const uint64_t limit =
@@ -160,6 +183,10 @@ class Emulator {
       }
       if (target > limit) target = limit;
       if (target > now_ps()) machine_.cpu->run_until(target - time_offset_ps_);
+      if (!measuring_ && now_ps() >= static_cast<uint64_t>(options_.measure_from_s * 1e12)) {
+        measuring_ = true;
+        measure_start_ = snapshot();
+      }
       Chip& chip = *machine_.chip;
       Sercom& uart = chip.sercom(kUartSercom);
       if (const std::string out = uart.take_output(); !out.empty()) {
@@ -238,6 +265,8 @@ class Emulator {
   uint64_t time_offset_ps_ = 0;
   sim::PollSet poll_;
   bool booted_ = false;  // the board has sent its first line since power-on
+  bool measuring_ = false;
+  Snapshot measure_start_;
   std::string held_;     // host bytes waiting for it
 };
 
@@ -294,10 +323,29 @@ int run(const Options& options) {
                  m.chip->cycles(), m.cpu->chunks());
     std::fprintf(stderr, "hmc-emu: command UART: %" PRIu64 " received bytes lost to overflow\n",
                  m.chip->sercom(kUartSercom).rx_overflows());
-    for (const auto& [exception, figures] : m.cpu->handler_figures()) {
-      std::fprintf(stderr, "hmc-emu: exception %u: %" PRIu64 " entries, %.1f cycles each\n",
-                   exception, figures.count,
-                   static_cast<double>(figures.cycles) / static_cast<double>(figures.count));
+    const auto& from = emulator.measure_start();
+    const auto to = emulator.snapshot();
+    const uint64_t cycles = to.cycles - from.cycles;
+    std::fprintf(stderr, "hmc-emu: measured from %.6f s to %.6f s: %" PRIu64 " cycles, %" PRIu64
+                         " instructions, %" PRIu64 " flash wait cycles; steps %" PRIu64 " %" PRIu64
+                         " %" PRIu64 "\n",
+                 static_cast<double>(from.ps) / 1e12, static_cast<double>(to.ps) / 1e12, cycles,
+                 to.instructions - from.instructions, to.flash_wait_cycles - from.flash_wait_cycles,
+                 to.steps[0] - from.steps[0], to.steps[1] - from.steps[1],
+                 to.steps[2] - from.steps[2]);
+    for (const auto& [exception, figures] : to.handlers) {
+      Cpu::HandlerFigures before;
+      if (const auto it = from.handlers.find(exception); it != from.handlers.end()) before = it->second;
+      const uint64_t count = figures.count - before.count;
+      const uint64_t spent = figures.cycles - before.cycles;
+      if (count == 0) continue;
+      std::fprintf(stderr, "hmc-emu: exception %u: %" PRIu64 " entries, %.1f cycles each, %" PRIu64
+                           " cycles (%.2f %% of the CPU), %" PRIu64 " instructions, %" PRIu64
+                           " flash wait cycles\n",
+                   exception, count, static_cast<double>(spent) / static_cast<double>(count), spent,
+                   cycles != 0 ? 100.0 * static_cast<double>(spent) / static_cast<double>(cycles) : 0.0,
+                   figures.instructions - before.instructions,
+                   figures.flash_wait_cycles - before.flash_wait_cycles);
     }
   }
   return code;
@@ -338,6 +386,9 @@ int main(int argc, char** argv) {
   app.add_flag("--touch-to-enter", options.touch_to_enter,
                "with --usb-pty: the port starts as an application's and a 1200-baud touch enters the bootloader");
   app.add_flag("--stats", options.stats, "print virtual/wall time and cycles per handler at the end");
+  app.add_option("--measure-from", options.measure_from_s,
+                 "--stats counts cycles, handler entries and STEP edges from this virtual time (seconds) on")
+      ->check(CLI::NonNegativeNumber);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -77,6 +77,9 @@ class Chip {
   }
   uint64_t cycles() const { return cycles_; }
   void charge_cycles(uint64_t cycles) { cycles_ += cycles; }
+  // Cycles charged ahead (a block is charged before it runs) that an access turned out not to
+  // take; never more than was charged since the last advance.
+  void refund_cycles(uint64_t cycles) { cycles_ -= cycles; }
   // The cycle count at which virtual time reaches `ps` (at the current CPU clock).
   uint64_t cycles_at(uint64_t ps) const;
   // A bus stall measured in cycles of `hz` (a synchronisation delay), charged to the CPU.

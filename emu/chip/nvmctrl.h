@@ -16,8 +16,8 @@
 // buffer writes), PARAM (NVMP = 4096, PSZ = 64 bytes), CTRLB (RWS, MANW and the automatic page
 // write when MANW is 0), LOCK regions and the BOOTPROT boot section, programming that can only
 // clear bits (a write without an erase ANDs). Not modelled: programming and erase times (commands
-// complete at once and READY never reads 0), the cache and the read wait states' timing (RWS is
-// stored for the CPU model to charge), the EEPROM emulation area's fuse, the security bit's effect
+// complete at once and READY never reads 0), the cache and the read wait states' timing (RWS,
+// READMODE and CACHEDIS are stored; the CPU's cycle model charges them, emu/cpu/cpu.h), the EEPROM emulation area's fuse, the security bit's effect
 // on a debugger.
 #pragma once
 
@@ -100,6 +100,9 @@ public:
   // Bytes protected by BOOTPROT (user row bits 2:0; datasheet, "Boot Loader Size" table).
   uint32_t boot_section_size() const;
   uint32_t read_wait_states() const { return (ctrlb_ >> 1) & 0xF; }
+  // CTRLB.READMODE: 0 NO_MISS_PENALTY, 1 LOW_POWER, 2 DETERMINISTIC; CTRLB.CACHEDIS.
+  uint32_t read_mode() const { return (ctrlb_ >> 16) & 3; }
+  bool cache_disabled() const { return ((ctrlb_ >> 18) & 1) != 0; }
   bool interrupt_pending() const { return (intflag() & inten_) != 0; }
 
 private:

@@ -93,16 +93,22 @@ void Scs::pend(unsigned exception) {
 // ---- SysTick (B3.3): counts CPU cycles down from RVR; COUNTFLAG on each 1 → 0 step, cleared by
 // a read of CSR; a write to CVR clears it to 0, and the next cycle reloads RVR.
 
+uint64_t Scs::systick_elapsed() const {
+  const uint64_t cycles = chip_.cycles() - start_cycles_;
+  return systick_ticks_ == systick_cycles_ ? cycles
+                                           : mul_div(cycles, systick_ticks_, systick_cycles_);
+}
+
 uint64_t Scs::systick_zeros() const {
   if ((csr_ & 1) == 0) return zeros_seen_;
-  const uint64_t elapsed = chip_.cycles() - start_cycles_;
+  const uint64_t elapsed = systick_elapsed();
   const uint64_t first = start_value_ != 0 ? start_value_ : systick_period();
   return elapsed < first ? 0 : 1 + (elapsed - first) / systick_period();
 }
 
 uint32_t Scs::systick_value() const {
   if ((csr_ & 1) == 0) return start_value_;
-  const uint64_t elapsed = chip_.cycles() - start_cycles_;
+  const uint64_t elapsed = systick_elapsed();
   if (elapsed <= start_value_) return static_cast<uint32_t>(start_value_ - elapsed);
   const uint64_t into = (elapsed - start_value_ - 1) % systick_period();
   return static_cast<uint32_t>((rvr_ & 0xFFFFFF) - into);
@@ -111,7 +117,9 @@ uint32_t Scs::systick_value() const {
 uint64_t Scs::next_event_ps() const {
   if ((csr_ & 3) != 3) return UINT64_MAX;
   const uint64_t first = start_value_ != 0 ? start_value_ : systick_period();
-  const uint64_t zero_cycle = start_cycles_ + first + zeros_pended_ * systick_period();
+  const uint64_t zero_tick = first + zeros_pended_ * systick_period();
+  const uint64_t zero_cycle =
+      start_cycles_ + (zero_tick * systick_cycles_ + systick_ticks_ - 1) / systick_ticks_;
   const uint64_t hz = chip_.cpu_hz();
   if (hz == 0) return UINT64_MAX;
   const uint64_t ahead = zero_cycle > chip_.cycles() ? zero_cycle - chip_.cycles() : 0;

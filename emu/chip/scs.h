@@ -31,6 +31,13 @@ class Scs : public Peripheral, public Timed {
   bool irq_enabled(unsigned line) const { return (enabled_ & (1u << line)) != 0; }
   void pend(unsigned exception);
   void reset();
+  // SysTick counts `ticks` per `cycles` CPU cycles (the SAMD21: 1 per 1). hmc-emu-bench sets
+  // 16384 per 1000 to stand for qemu's microbit under -icount shift=10: one instruction per
+  // 1024 ns, SysTick at 16 MHz.
+  void set_systick_rate(uint64_t ticks, uint64_t cycles) {
+    systick_ticks_ = ticks;
+    systick_cycles_ = cycles;
+  }
 
  private:
   int priority(unsigned exception) const;
@@ -39,6 +46,7 @@ class Scs : public Peripheral, public Timed {
   uint64_t systick_period() const { return uint64_t{rvr_ & 0xFFFFFF} + 1; }
   uint64_t systick_zeros() const;  // zero crossings since the count (re)started
   uint32_t systick_value() const;
+  uint64_t systick_elapsed() const;  // ticks since start_cycles_
 
   Chip& chip_;
   uint32_t enabled_ = 0;
@@ -52,6 +60,7 @@ class Scs : public Peripheral, public Timed {
   uint32_t csr_ = 0, rvr_ = 0;
   uint64_t start_cycles_ = 0;
   uint32_t start_value_ = 0;
+  uint64_t systick_ticks_ = 1, systick_cycles_ = 1;
   uint64_t zeros_seen_ = 0;     // COUNTFLAG: crossings already reported by a CSR read
   uint64_t zeros_pended_ = 0;   // TICKINT: crossings already turned into a pending SysTick
 };

@@ -24,6 +24,8 @@ constexpr uint32_t kRegions[][2] = {{0x40000000, 0x10000}, {0x41000000, 0x10000}
 // states). The return's cost is not in the manual: 13 cycles is a guess (the 8-word unstack).
 constexpr uint64_t kEntryCycles = 15, kReturnCycles = 13;
 constexpr uint32_t kExceptionExit = 8;  // Unicorn's interrupt number for an EXC_RETURN branch
+constexpr uint32_t kBreakpoint = 7;     // ... for BKPT
+constexpr uint32_t kIobusBase = 0x60000000;
 
 std::string hex(uint32_t v) {
   char text[16];
@@ -67,15 +69,24 @@ std::string Cpu::where(uint32_t address) const {
   return image_.function_at(address) + " (" + hex(address) + ")";
 }
 
+// RAM is the engine's memory mapped from ram_: the exception frames and the DMAC's transfers
+// reach it directly. (uc_mem_write looks for translated code to invalidate on every call,
+// allocating as it goes; no code runs from RAM here.)
 bool Cpu::read(uint32_t address, void* bytes, uint32_t count) {
-  const bool in_ram = address >= kRamBase && address - kRamBase + uint64_t{count} <= kRamSize;
+  if (address >= kRamBase && address - kRamBase + uint64_t{count} <= kRamSize) {
+    std::memcpy(bytes, ram_.data() + (address - kRamBase), count);
+    return true;
+  }
   const bool in_flash = address + uint64_t{count} <= kFlashSize;
-  return (in_ram || in_flash) && uc_mem_read(uc_, address, bytes, count) == UC_ERR_OK;
+  return in_flash && uc_mem_read(uc_, address, bytes, count) == UC_ERR_OK;
 }
 
 bool Cpu::write(uint32_t address, const void* bytes, uint32_t count) {
-  const bool in_ram = address >= kRamBase && address - kRamBase + uint64_t{count} <= kRamSize;
-  return in_ram && uc_mem_write(uc_, address, bytes, count) == UC_ERR_OK;
+  if (address >= kRamBase && address - kRamBase + uint64_t{count} <= kRamSize) {
+    std::memcpy(ram_.data() + (address - kRamBase), bytes, count);
+    return true;
+  }
+  return false;
 }
 
 bool Cpu::init(std::string& error) {
@@ -90,7 +101,7 @@ bool Cpu::init(std::string& error) {
   };
   map(kFlashBase, kFlashSize, UC_PROT_READ | UC_PROT_EXEC);
   map(kNvmRowsBase, kNvmRowsSize, UC_PROT_READ);
-  map(kRamBase, kRamSize, UC_PROT_ALL);
+  if (err == UC_ERR_OK) err = uc_mem_map_ptr(uc_, kRamBase, kRamSize, UC_PROT_ALL, ram_.data());
   if (err != UC_ERR_OK) {
     error = std::string("cannot map the chip's memory: ") + uc_strerror(err);
     return false;
@@ -174,19 +185,69 @@ bool Cpu::reset(uint32_t vector_table, std::string& error) {
   return true;
 }
 
-// Each translated block is costed once; flash blocks by their start address in a flat table.
-uint32_t Cpu::block_cost(uint64_t address, uint32_t size) {
+// Each translated block is analysed once; flash blocks by their start address in a flat table.
+const Cpu::BlockCost& Cpu::block_cost(uint64_t address, uint32_t size) {
   BlockCost* cached = address < kFlashSize ? &flash_costs_[address / 2] : nullptr;
-  if (cached != nullptr && cached->size == size) return cached->cycles;
+  if (cached != nullptr && cached->size == size) return *cached;
+  if (flash_lines_.size() > (1u << 22)) {
+    // Blocks re-translated with other sizes left old line lists behind: start afresh.
+    for (BlockCost& c : flash_costs_) c = BlockCost{};
+    flash_lines_.clear();
+  }
   std::vector<uint8_t> code(size);
-  uint32_t cost = size / 2;
+  std::vector<uint32_t>& lines = cached != nullptr ? flash_lines_ : scratch_lines_;
+  if (cached == nullptr) lines.clear();
+  const uint32_t lines_at = static_cast<uint32_t>(lines.size());
+  ThumbBlock block;
   if (uc_mem_read(uc_, address, code.data(), size) == UC_ERR_OK) {
-    cost = thumb_block_cycles(code.data(), size);
+    block = analyse_thumb_block(code.data(), size, static_cast<uint32_t>(address), kFlashSize,
+                                &lines);
+  } else {
+    block.cycles = block.instructions = size / 2;
   }
-  if (cached != nullptr && size <= UINT16_MAX && cost <= UINT16_MAX) {
-    *cached = BlockCost{static_cast<uint16_t>(size), static_cast<uint16_t>(cost)};
+  BlockCost cost;
+  cost.size = static_cast<uint16_t>(size);
+  cost.cycles = static_cast<uint16_t>(block.cycles);
+  cost.instructions = static_cast<uint16_t>(block.instructions);
+  cost.lines = static_cast<uint16_t>(lines.size() - lines_at);
+  cost.lines_at = lines_at;
+  cost.ends_in_conditional_branch = block.ends_in_conditional_branch;
+  // Blocks are short (the engine ends a translation block within a page); a size beyond the
+  // table's fields would be analysed on each run.
+  if (cached != nullptr && size <= UINT16_MAX && block.cycles <= UINT16_MAX) {
+    *cached = cost;
+    return *cached;
   }
-  return cost;
+  scratch_cost_ = cost;
+  return scratch_cost_;
+}
+
+// Wait states of reading `lines` from flash through the NVM cache, as NVMCTRL CTRLB sets them
+// (SAMD21 datasheet, NVMCTRL "Cache"; the READMODE descriptions in Microchip's register
+// description): NO_MISS_PENALTY, the reset value, charges RWS on a miss and nothing on a hit;
+// LOW_POWER one wait state more on a miss; DETERMINISTIC, and the cache disabled, RWS on every
+// read.
+uint32_t Cpu::flash_waits(const uint32_t* lines, uint32_t count) {
+  uint32_t waits = 0;
+  for (uint32_t i = 0; i < count; ++i) {
+    uint32_t& tag = cache_tags_[lines[i] % 8];
+    if (tag != lines[i]) {
+      if (!nvm_.cache_off) tag = lines[i];
+      waits += nvm_.miss;
+    } else if (nvm_.every_read) {
+      waits += nvm_.rws;
+    }
+  }
+  return waits;
+}
+
+// NVMCTRL CTRLB's read settings, taken at each chunk's start and after a write to NVMCTRL.
+void Cpu::read_nvm_settings() {
+  const Nvmctrl& nvm = chip_.nvmctrl();
+  nvm_.rws = nvm.read_wait_states();
+  nvm_.cache_off = nvm.cache_disabled();
+  nvm_.every_read = nvm_.cache_off || nvm.read_mode() == 2;
+  nvm_.miss = nvm_.rws + (nvm.read_mode() == 1 ? 1 : 0);
 }
 
 void Cpu::on_block(uc_engine*, uint64_t address, uint32_t size, void* user) {
@@ -201,11 +262,30 @@ void Cpu::on_block(uc_engine*, uint64_t address, uint32_t size, void* user) {
   }
   // A stop requested here takes effect before the block runs: the block is charged only when
   // it runs.
-  if (chip.stopped() || chip.cycles() >= cpu.deadline_cycles_) {
+  if (chip.stopped() || cpu.exited_ || chip.cycles() >= cpu.deadline_cycles_) {
     uc_emu_stop(cpu.uc_);
     return;
   }
-  chip.charge_cycles(cpu.block_cost(address, size));
+  const BlockCost& cost = cpu.block_cost(address, size);
+  cpu.instructions_ += cost.instructions;
+  if (cpu.options_.cost == CostModel::kInstructions) {
+    chip.charge_cycles(cost.instructions);
+  } else {
+    uint64_t cycles = cost.cycles;
+    // DDI0484C table 3-1: a conditional branch not taken costs 1 cycle, taken 2.
+    if (cpu.previous_conditional_ && address == cpu.previous_end_) cycles -= 1;
+    if (cost.lines != 0) {
+      const uint32_t* lines =
+          (&cost == &cpu.scratch_cost_ ? cpu.scratch_lines_ : cpu.flash_lines_).data() +
+          cost.lines_at;
+      const uint32_t waits = cpu.flash_waits(lines, cost.lines);
+      cpu.flash_wait_cycles_ += waits;
+      cycles += waits;
+    }
+    chip.charge_cycles(cycles);
+  }
+  cpu.previous_end_ = address + size;
+  cpu.previous_conditional_ = cost.ends_in_conditional_branch;
   if (chip.take_irq_dirty()) {
     const bool primask = (cpu.reg(UC_ARM_REG_PRIMASK) & 1) != 0;
     if (chip.scs().ready_exception(primask) != 0) {
@@ -219,6 +299,9 @@ void Cpu::on_block(uc_engine*, uint64_t address, uint32_t size, void* user) {
 uint64_t Cpu::on_mmio_read(uc_engine*, uint64_t offset, unsigned size, void* user) {
   const MmioRegion& region = *static_cast<MmioRegion*>(user);
   Cpu& cpu = *region.cpu;
+  // DDI0484C, "Single-cycle I/O port": a load or store there takes one cycle, not the two the
+  // block was charged.
+  if (region.base == kIobusBase && cpu.options_.cost == CostModel::kCycles) cpu.chip_.refund_cycles(1);
   const uint32_t value = cpu.chip_.bus_read(region.base + static_cast<uint32_t>(offset), size);
   if (cpu.chip_.stopped()) uc_emu_stop(cpu.uc_);
   return value;
@@ -227,8 +310,10 @@ uint64_t Cpu::on_mmio_read(uc_engine*, uint64_t offset, unsigned size, void* use
 void Cpu::on_mmio_write(uc_engine*, uint64_t offset, unsigned size, uint64_t value, void* user) {
   const MmioRegion& region = *static_cast<MmioRegion*>(user);
   Cpu& cpu = *region.cpu;
-  cpu.chip_.bus_write(region.base + static_cast<uint32_t>(offset), static_cast<uint32_t>(value),
-                      size);
+  if (region.base == kIobusBase && cpu.options_.cost == CostModel::kCycles) cpu.chip_.refund_cycles(1);
+  const uint32_t address = region.base + static_cast<uint32_t>(offset);
+  cpu.chip_.bus_write(address, static_cast<uint32_t>(value), size);
+  if (address - Nvmctrl::kBase < 0x100) cpu.read_nvm_settings();  // CTRLB applies at once
   if (cpu.chip_.stopped()) uc_emu_stop(cpu.uc_);
 }
 
@@ -252,6 +337,8 @@ void Cpu::on_interrupt(uc_engine*, uint32_t intno, void* user) {
   Cpu& cpu = *static_cast<Cpu*>(user);
   if (intno == kExceptionExit) {
     cpu.return_from_exception();
+  } else if (intno == kBreakpoint && cpu.options_.semihosting) {
+    cpu.semihost_call();
   } else if (cpu.options_.run_fault_handler) {
     cpu.enter_exception(Scs::kHardFault);
   } else {
@@ -259,6 +346,30 @@ void Cpu::on_interrupt(uc_engine*, uint32_t intno, void* user) {
                         std::to_string(intno) + ")");
   }
   uc_emu_stop(cpu.uc_);
+}
+
+// ARM semihosting (the "Semihosting for AArch32 and AArch64" specification): BKPT 0xAB with the
+// operation in R0 and its argument in R1. SYS_WRITE0 (0x04) writes a NUL-terminated string;
+// SYS_EXIT (0x18) ends the program, R1 = 0x20026 (ADP_Stopped_ApplicationExit) for success.
+void Cpu::semihost_call() {
+  const uint32_t pc = reg(UC_ARM_REG_PC) & ~1u;
+  uint16_t op = 0;
+  if (!read(pc, &op, 2) || op != 0xBEAB) {
+    chip_.violation("breakpoint (BKPT " + hex(op) + ") that is not a semihosting call");
+    return;
+  }
+  const uint32_t call = reg(UC_ARM_REG_R0), arg = reg(UC_ARM_REG_R1);
+  if (call == 0x04) {
+    char c = 0;
+    for (uint32_t at = arg; read(at, &c, 1) && c != 0; ++at) semihost_output_ += c;
+  } else if (call == 0x18) {
+    exited_ = true;
+    exit_ok_ = arg == 0x20026;
+  } else {
+    chip_.violation("semihosting call " + hex(call) + " is not modelled (SYS_WRITE0, SYS_EXIT are)");
+    return;
+  }
+  set_reg(UC_ARM_REG_PC, (pc + 2) | 1u);
 }
 
 // B1.5.6: push R0-R3, R12, LR, the return address and xPSR on the current (main) stack,
@@ -291,13 +402,24 @@ void Cpu::enter_exception(unsigned exception) {
                     hex(chip_.scs().vtor()) + " is not a Thumb address in flash: " + hex(vector));
     return;
   }
+  const uint64_t entered = chip_.cycles();
+  uint64_t entry_waits = 0;
+  if (options_.cost == CostModel::kCycles) {
+    // The vector is read from flash (the NVM cache and its wait states, flash_waits).
+    const uint32_t line = (chip_.scs().vtor() + 4 * exception) / kFlashLineBytes;
+    const uint32_t waits = flash_waits(&line, 1);
+    flash_wait_cycles_ += waits;
+    entry_waits = waits;
+    chip_.charge_cycles(waits);
+  }
+  previous_conditional_ = false;
   set_reg(UC_ARM_REG_SP, sp);
   set_reg(UC_ARM_REG_LR, ipsr != 0 ? 0xFFFFFFF1u : 0xFFFFFFF9u);
   set_reg(UC_ARM_REG_IPSR, exception);
   set_reg(UC_ARM_REG_PC, vector);
   chip_.scs().acknowledge(exception);
-  chip_.charge_cycles(kEntryCycles);
-  active_.push_back(Active{exception, chip_.cycles()});
+  chip_.charge_cycles(options_.cost == CostModel::kCycles ? kEntryCycles : 0);
+  active_.push_back(Active{exception, entered, instructions_, flash_wait_cycles_ - entry_waits});
 }
 
 // B1.5.8: unstack the frame from the main stack, undo the alignment word, back to the
@@ -316,14 +438,11 @@ void Cpu::return_from_exception() {
   }
   sp += 32;
   if ((frame[7] & (1u << 9)) != 0) sp += 4;
-  chip_.charge_cycles(kReturnCycles);
+  chip_.charge_cycles(options_.cost == CostModel::kCycles ? kReturnCycles : 0);
   if (!active_.empty()) {
     const Active done = active_.back();
     active_.pop_back();
-    HandlerFigures& figures = handler_figures_[done.exception];
-    ++figures.count;
-    figures.cycles += chip_.cycles() - done.entered_cycles + kEntryCycles;
-    chip_.scs().complete(done.exception);
+    account_return(done);
   }
   set_reg(UC_ARM_REG_R0, frame[0]);
   set_reg(UC_ARM_REG_R1, frame[1]);
@@ -338,8 +457,18 @@ void Cpu::return_from_exception() {
 }
 
 void Cpu::set_deadline() {
+  read_nvm_settings();
   const uint64_t ps = chip_.next_event_ps() < until_ps_ ? chip_.next_event_ps() : until_ps_;
   deadline_cycles_ = chip_.cycles_at(ps);
+}
+
+void Cpu::account_return(const Active& done) {
+  HandlerFigures& figures = handler_figures_[done.exception];
+  ++figures.count;
+  figures.cycles += chip_.cycles() - done.entered_cycles;
+  figures.instructions += instructions_ - done.entered_instructions;
+  figures.flash_wait_cycles += flash_wait_cycles_ - done.entered_waits;
+  chip_.scs().complete(done.exception);
 }
 
 // When the engine is stopped while an EXC_RETURN branch is in flight, it completes the return
@@ -348,17 +477,15 @@ void Cpu::set_deadline() {
 void Cpu::sync_active() {
   const unsigned ipsr = reg(UC_ARM_REG_IPSR) & 0x3F;
   while (!active_.empty() && active_.back().exception != ipsr) {
-      const Active done = active_.back();
+    const Active done = active_.back();
     active_.pop_back();
-    HandlerFigures& figures = handler_figures_[done.exception];
-    ++figures.count;
-    figures.cycles += chip_.cycles() - done.entered_cycles + kEntryCycles + kReturnCycles;
-    chip_.scs().complete(done.exception);
+    chip_.charge_cycles(options_.cost == CostModel::kCycles ? kReturnCycles : 0);
+    account_return(done);
   }
 }
 
 void Cpu::run_until(uint64_t until_ps) {
-  while (!chip_.stopped() && chip_.now_ps() < until_ps) {
+  while (!chip_.stopped() && !exited_ && chip_.now_ps() < until_ps) {
     sync_active();
     chip_.advance();
     if (chip_.stopped()) break;
@@ -370,6 +497,9 @@ void Cpu::run_until(uint64_t until_ps) {
     until_ps_ = until_ps;
     set_deadline();
     chip_.take_irq_dirty();
+    // An exception held back by PRIMASK is looked for again at every block until CPSIE lets
+    // it in (without this it waited for the chunk's deadline, the next peripheral event).
+    if (primask && chip_.scs().ready_exception(false) != 0) chip_.irq_changed();
     ++chunks_;
     const uc_err err = uc_emu_start(uc_, pc() | 1u, 0xFFFFFFFFu, 0, 0);
     if (err != UC_ERR_OK && !chip_.stopped()) {

@@ -20,8 +20,18 @@
 
 namespace hmc::emu {
 
+// What virtual time counts. kCycles: the Cortex-M0+ cycle model (cycles.h; the flash wait
+// states through the NVM cache; exception entry and return; the chip's synchronisation stalls).
+// kInstructions: one cycle per instruction, as qemu's -icount counts (the calibration against
+// bench/qemu, hmc-emu-bench).
+enum class CostModel { kCycles, kInstructions };
+
 struct CpuOptions {
   bool run_fault_handler = false;  // false: a HardFault stops the emulator as an error
+  CostModel cost = CostModel::kCycles;
+  // BKPT 0xAB is an ARM semihosting call (SYS_WRITE0, SYS_EXIT; the rest stop the emulator) and
+  // not a breakpoint: bare-metal programs such as bench/qemu's print and exit this way.
+  bool semihosting = false;
 };
 
 class Cpu : public Memory {
@@ -46,11 +56,21 @@ class Cpu : public Memory {
   struct HandlerFigures {
     uint64_t count = 0;
     uint64_t cycles = 0;
+    uint64_t instructions = 0;
+    uint64_t flash_wait_cycles = 0;  // of `cycles`
   };
   const std::map<unsigned, HandlerFigures>& handler_figures() const { return handler_figures_; }
 
   // How many times the engine was started (each chunk of instructions).
   uint64_t chunks() const { return chunks_; }
+  uint64_t instructions() const { return instructions_; }
+  // Cycles the flash wait states added (NVM cache misses).
+  uint64_t flash_wait_cycles() const { return flash_wait_cycles_; }
+
+  // Semihosting: what the program wrote (taken), and its exit status once it called SYS_EXIT.
+  std::string take_semihost_output() { return std::move(semihost_output_); }
+  bool exited() const { return exited_; }
+  bool exit_ok() const { return exit_ok_; }
 
   bool read(uint32_t address, void* bytes, uint32_t count) override;
   bool write(uint32_t address, const void* bytes, uint32_t count) override;
@@ -69,7 +89,18 @@ class Cpu : public Memory {
   void sync_active();
   uint32_t reg(int id) const;
   void set_reg(int id, uint32_t value);
-  uint32_t block_cost(uint64_t address, uint32_t size);
+  struct BlockCost {
+    uint16_t size = 0;  // 0: not analysed yet
+    uint16_t cycles = 0;
+    uint16_t instructions = 0;
+    uint16_t lines = 0;       // flash lines read, in flash_lines_ from lines_at
+    uint32_t lines_at = 0;
+    bool ends_in_conditional_branch = false;
+  };
+  const BlockCost& block_cost(uint64_t address, uint32_t size);
+  uint32_t flash_waits(const uint32_t* lines, uint32_t count);
+  void read_nvm_settings();
+  void semihost_call();
 
   Chip& chip_;
   const ElfImage& image_;
@@ -80,15 +111,38 @@ class Cpu : public Memory {
   uint64_t until_ps_ = 0;
   uint64_t chunks_ = 0;
   uint32_t block_address_ = 0;
-  struct BlockCost {
-    uint16_t size = 0;
-    uint16_t cycles = 0;
-  };
+  uint64_t instructions_ = 0;
+  uint64_t flash_wait_cycles_ = 0;
+  // The block before: where it ended and whether its last instruction was a conditional
+  // branch (charged as taken; one cycle back when the next block starts where it ended).
+  uint64_t previous_end_ = 0;
+  bool previous_conditional_ = false;
+  // Flash blocks by start address (halfword index); other blocks are analysed on each run.
   std::vector<BlockCost> flash_costs_ = std::vector<BlockCost>(256 * 1024 / 2);
+  std::vector<uint32_t> flash_lines_;  // the flash blocks' line lists, back to back
+  BlockCost scratch_cost_;
+  std::vector<uint32_t> scratch_lines_;
+  // The NVM cache: direct-mapped, 8 lines of 64 bits (SAMD21 datasheet, NVMCTRL "Cache"); the
+  // line number held by each entry, UINT32_MAX: empty.
+  uint32_t cache_tags_[8] = {UINT32_MAX, UINT32_MAX, UINT32_MAX, UINT32_MAX,
+                             UINT32_MAX, UINT32_MAX, UINT32_MAX, UINT32_MAX};
+  struct NvmReadSettings {
+    uint32_t rws = 0;          // CTRLB.RWS
+    uint32_t miss = 0;         // wait states of a cache miss
+    bool every_read = false;   // DETERMINISTIC or the cache disabled: RWS on every read
+    bool cache_off = false;    // CTRLB.CACHEDIS
+  } nvm_;
+  std::vector<uint8_t> ram_ = std::vector<uint8_t>(32 * 1024);
+  std::string semihost_output_;
+  bool exited_ = false;
+  bool exit_ok_ = false;
   struct Active {
     unsigned exception;
     uint64_t entered_cycles;
+    uint64_t entered_instructions;
+    uint64_t entered_waits;
   };
+  void account_return(const Active& done);
   std::vector<Active> active_;
   std::map<unsigned, HandlerFigures> handler_figures_;
   std::vector<uc_hook> hooks_;

@@ -39,19 +39,42 @@ uint32_t cycles16(uint16_t op) {
 
 }  // namespace
 
-uint32_t thumb_block_cycles(const uint8_t* bytes, uint32_t size) {
-  uint32_t cycles = 0;
+ThumbBlock analyse_thumb_block(const uint8_t* bytes, uint32_t size, uint32_t address,
+                               uint32_t flash_end, std::vector<uint32_t>* flash_lines) {
+  ThumbBlock block;
+  uint32_t fetched_line = UINT32_MAX;
+  const auto touch = [&](uint32_t at) {
+    if (flash_lines == nullptr || at >= flash_end) return;
+    const uint32_t line = at / kFlashLineBytes;
+    if (flash_lines->empty() || flash_lines->back() != line) flash_lines->push_back(line);
+  };
   for (uint32_t at = 0; at + 1 < size;) {
     const uint16_t op = static_cast<uint16_t>(bytes[at] | bytes[at + 1] << 8);
+    const uint32_t pc = address + at;
+    if (pc / kFlashLineBytes != fetched_line) {
+      fetched_line = pc / kFlashLineBytes;
+      touch(pc);
+    }
+    ++block.instructions;
+    block.ends_in_conditional_branch = false;
     if ((op & 0xE000) == 0xE000 && (op & 0x1800) != 0) {      // 32-bit instruction
-      cycles += 3;  // BL, MRS, MSR, DMB, DSB, ISB: 3 each
+      block.cycles += 3;  // BL, MRS, MSR, DMB, DSB, ISB: 3 each
+      if ((pc + 2) / kFlashLineBytes != fetched_line) {
+        fetched_line = (pc + 2) / kFlashLineBytes;
+        touch(pc + 2);
+      }
       at += 4;
       continue;
     }
-    cycles += cycles16(op);
+    block.cycles += cycles16(op);
+    if ((op & 0xF800) == 0x4800) {  // LDR literal: the word at Align(PC + 4, 4) + imm8 * 4
+      touch(((pc + 4) & ~3u) + (op & 0xFFu) * 4);
+      fetched_line = UINT32_MAX;    // the fetch after it reads its line again from the cache
+    }
+    block.ends_in_conditional_branch = (op & 0xF000) == 0xD000 && (op & 0x0F00) < 0x0E00;
     at += 2;
   }
-  return cycles;
+  return block;
 }
 
 }  // namespace hmc::emu

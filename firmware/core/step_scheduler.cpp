@@ -193,16 +193,23 @@ void StepScheduler::sync(uint8_t index) {
 // cost estimate): an event overdue by kOverdueTicks has the interrupt run at once, instead of
 // waiting for the counter to come round (89 s).
 void StepScheduler::fill() {
-  const uint32_t now = static_cast<uint32_t>(timer_.now());
+  // An idle lane costs a few loads: no plan to produce from, nothing armed to watch; the clock
+  // (a synchronised counter read on the board) is read only for an armed lane.
+  bool have_now = false;
+  uint32_t now = 0;
   for (uint8_t index = 0; index < kMotors; ++index) {
     sync(index);
     produce(index);
     const StepLane& lane = engine_.lanes[index];
     if (load8(lane.armed) == 0) {
       if (load8(lane.head) != lane.tail) wake(index);
-    } else if (static_cast<int32_t>(now - load(lane.next)) > static_cast<int32_t>(kOverdueTicks)) {
-      kick();
+      continue;
     }
+    if (!have_now) {
+      now = static_cast<uint32_t>(timer_.now());
+      have_now = true;
+    }
+    if (static_cast<int32_t>(now - load(lane.next)) > static_cast<int32_t>(kOverdueTicks)) kick();
   }
 }
 
@@ -229,6 +236,7 @@ uint32_t StepScheduler::steps_ahead_allowed(const Motor& mo) const {
 // goes in as runs of many steps (a ramp, one segment a step, is held back by the ring's size).
 void StepScheduler::produce(uint8_t index) {
   Motor& mo = motors_[index];
+  if (mo.active == kNoSlot) return;  // no plan: nothing to produce (and no division)
   const StepLane& lane = engine_.lanes[index];
   bool pushed = false;
   const uint32_t allowed = steps_ahead_allowed(mo);

@@ -1,0 +1,117 @@
+#!/usr/bin/env python3
+"""Cycles per step of the real firmware image's step interrupt, measured in hmc-emu's cycle model
+(scripts/bench cycles; docs/performance.md, "Cycles on the real image").
+
+Each case boots hmc-firmware.elf in hmc-emu --fast, sends the frames that start its motors (the
+first one also ends the power-up self-test), and takes hmc-emu --stats from --measure-from to
+--max-time: the step timer interrupt's (TC4, exception 35) cycles, entry and return, flash wait
+states and the timer's synchronisation included, over the STEP rising edges the emulated board
+counted. Beside them: bench/qemu's instruction counts of the same engine (the core alone, a fake
+port), Klipper's cycles per step on the SAMD21, and issue 18's targets.
+
+Usage: cycles.py HMC_EMU IMAGE [QEMU_BENCH_OUTPUT]
+"""
+import re
+import subprocess
+import sys
+
+MEASURE_FROM = 0.3  # s of virtual time: the boot, the self-test's end and the starts are over
+MEASURE_TO = 1.2
+
+
+def frame(name, *values):
+    return "STX#%d#%s#%s#%d#ETX\n" % (len(values) + 1, name, "#".join(str(v) for v in values),
+                                      sum(values) % 256)
+
+
+def run(moves, accel=0):
+    """moves: [(motor, delay_us)]; all forward at 1/256 (no switch reached in the window)."""
+    lines = []
+    for motor, _ in moves:
+        lines.append(frame("SET", motor, 3, accel))
+    for motor, delay in moves:
+        lines.append(frame("STM", motor, 1, 256, 0, delay))
+    # Standard input stays open until hmc-emu stops at --max-time (at its end hmc-emu would stop
+    # once the replies are quiet).
+    emu = subprocess.Popen([EMU, IMAGE, "--fast", "--quiet", "--stats", "--measure-from",
+                            str(MEASURE_FROM), "--max-time", str(MEASURE_TO)],
+                           stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True)
+    emu.stdin.write("".join(lines))
+    emu.stdin.flush()
+    stdout, stderr = emu.stdout.read(), emu.stderr.read()
+    emu.wait()
+    emu.stdin.close()
+    done = subprocess.CompletedProcess(emu.args, emu.returncode, stdout, stderr)
+    replies = done.stdout.splitlines()
+    refused = [r for r in replies if "NAK" in r]
+    if refused:
+        sys.exit("cycles: the image refused a frame: %s" % refused)
+    window = re.search(r"measured from ([\d.]+) s to ([\d.]+) s: (\d+) cycles.*?(\d+) flash wait "
+                       r"cycles; steps (\d+) (\d+) (\d+)", done.stderr)
+    step = re.search(r"exception 35: (\d+) entries, ([\d.]+) cycles each, (\d+) cycles .*?, "
+                     r"(\d+) instructions, (\d+) flash wait cycles", done.stderr)
+    if not window or not step:
+        sys.exit("cycles: no figures from hmc-emu:\n" + done.stderr)
+    steps = sum(int(window.group(i)) for i in (5, 6, 7))
+    expected = len(moves)
+    moving = sum(1 for i in (5, 6, 7) if int(window.group(i)) > 0)
+    if moving != expected:
+        sys.exit("cycles: %d motors stepped, %d expected:\n%s" % (moving, expected, done.stderr))
+    seconds = float(window.group(2)) - float(window.group(1))
+    return {
+        "steps": steps,
+        "rate": steps / seconds,
+        "entries": int(step.group(1)),
+        "per_entry": float(step.group(2)),
+        "per_step": int(step.group(3)) / steps,
+        "share": 100.0 * int(step.group(3)) / int(window.group(3)),
+        "instructions": int(step.group(4)) / steps,
+        "isr_waits": int(step.group(5)) / steps,
+    }
+
+
+def qemu_rows(path):
+    rows = {}
+    if path:
+        for line in open(path):
+            cells = [c.strip() for c in line.strip().strip("|").split("|")]
+            if len(cells) == 7 and cells[1].isdigit():
+                rows[cells[0]] = cells[4]
+    return rows
+
+
+EMU, IMAGE = sys.argv[1], sys.argv[2]
+qemu = qemu_rows(sys.argv[3] if len(sys.argv) > 3 else None)
+
+# (case, moves, acceleration, bench/qemu's row, Klipper's cycles per step, issue 18's target)
+CASES = [
+    ("1 motor, constant rate (100 us)", [(1, 100)], 0, "1 motor, constant rate", 70, 140),
+    ("1 motor, ramping toward 25 us (40 000 steps/s^2)", [(1, 25)], 40000, "1 motor, ramping", 70, 150),
+    ("3 motors, constant rate (100, 130, 177 us)", [(1, 100), (2, 130), (3, 177)], 0,
+     "3 motors, constant rate", 102, 120),
+    ("3 motors at the budget, constant rate (61 us each: 49 180 steps/s)",
+     [(1, 61), (2, 61), (3, 61)], 0, "3 motors, constant rate, same grid", 102, 120),
+    ("3 motors ramping toward 76 us (13 157 steps/s^2 each)", [(1, 76), (2, 76), (3, 76)], 13157,
+     "3 motors, ramping", 102, 160),
+]
+
+print("Step interrupt of the real image (hmc-firmware.elf, real HAL) in hmc-emu's cycle model, "
+      "from %.1f s to %.1f s of virtual time at 48 MHz:" % (MEASURE_FROM, MEASURE_TO))
+print()
+print("| case | steps/s | cycles per step | of which flash wait states | instructions per step | "
+      "cycles per interrupt | CPU share | bench/qemu instructions per step (core, fake port) | "
+      "Klipper cycles per step | issue 18 target |")
+print("|---|---|---|---|---|---|---|---|---|---|")
+results = []
+for name, moves, accel, qemu_row, klipper, target in CASES:
+    r = run(moves, accel)
+    results.append((name, r, klipper, target))
+    print("| %s | %.0f | %.1f | %.1f | %.1f | %.1f | %.1f %% | %s | %d | <= %d |" % (
+        name, r["rate"], r["per_step"], r["isr_waits"], r["instructions"], r["per_entry"],
+        r["share"], qemu.get(qemu_row, "-"), klipper, target))
+print()
+for name, r, klipper, target in results:
+    print("summary: | firmware step interrupt on the real image (hmc-emu cycles), %s | %.0f cycles per "
+          "step | Klipper on the SAMD21: %d cycles per step | %.1fx | <= %d (issue 18) |" % (
+              name, r["per_step"], klipper, r["per_step"] / klipper, target))

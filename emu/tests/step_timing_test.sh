@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# The real image's step interrupt in hmc-emu: one motor at 100 us (10 000 steps/s) makes one
+# interrupt per step, each within its period. Fails if an interrupt held back by PRIMASK waits for
+# the next peripheral event instead of the CPSIE (the step engine then catches up with a burst
+# of steps in one interrupt: before the fix, 4 940 interrupts for 9 001 steps).
+# Usage: step_timing_test.sh HMC_EMU IMAGE_DIR
+# Without the images the test is skipped (77), unless CI=true.
+set -uo pipefail
+emu=$1
+image=$2/hmc-firmware.elf
+if [[ ! -f $image ]]; then
+  [[ ${CI:-} == true ]] && { echo "FAIL: no $image (build the firmware preset first)"; exit 1; }
+  echo "SKIP: no $image"; exit 77
+fi
+# Standard input stays open until --max-time ends the run (at its end hmc-emu would stop early).
+exec 3< <(printf 'STX#4#SET#1#3#0#4#ETX\nSTX#6#STM#1#1#256#0#100#102#ETX\n'; exec sleep 120 2>/dev/null)
+feeder=$!
+stats=$(timeout 100 "$emu" "$image" --fast --quiet --stats --measure-from 0.3 --max-time 0.8 <&3 2>&1 >/dev/null)
+kill "$feeder" 2>/dev/null
+exec 3<&-
+window=$(grep -o 'steps [0-9]* [0-9]* [0-9]*' <<<"$stats")
+entries=$(grep -o 'exception 35: [0-9]* entries' <<<"$stats" | grep -o '[0-9]* entries' | grep -o '[0-9]*')
+per_entry=$(grep -o 'exception 35: [0-9]* entries, [0-9.]* cycles each' <<<"$stats" | grep -o '[0-9.]* cycles each' | grep -o '^[0-9]*')
+read -r _ steps other1 other2 <<<"$window"
+echo "window: $window; TC4 entries $entries, $per_entry cycles each"
+if [[ -z $entries || -z $steps ]]; then echo "FAIL: no figures from hmc-emu:"; echo "$stats"; exit 1; fi
+# 0.5 s at 10 000 steps/s: 5 000 steps, one interrupt each (±1 at the window's edges).
+if (( steps < 4990 || steps > 5010 || other1 != 0 || other2 != 0 )); then
+  echo "FAIL: expected about 5000 steps of motor 1 alone"; exit 1
+fi
+if (( entries < steps - 1 || entries > steps + 1 )); then
+  echo "FAIL: $entries step interrupts for $steps steps (expected one each)"; exit 1
+fi
+if (( per_entry >= 4800 )); then echo "FAIL: an interrupt of $per_entry cycles outlasts its 4 800-cycle period"; exit 1; fi
+echo "ok"
