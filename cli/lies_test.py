@@ -138,6 +138,14 @@ def run_cell(cell, board, during, args, want_exit, wording, after):
                                     (motor, steps, micro, board_pos, status["motors"][int(motor) - 1]["state"]))
             if not said:
                 problems.append("hmc named no position where a motor stopped")
+        if after.startswith("moved:"):
+            # Each motor named moved on the board (a command the board ignored moves nothing).
+            time.sleep(0.3)
+            status = json.loads(control(cport, "status"))
+            for motor in after[len("moved:"):].split(","):
+                m = status["motors"][int(motor) - 1]
+                if m["pos"] == 0 or m["state"] != "idle":
+                    problems.append("motor %s did not move, or still moves, on the board: %s" % (motor, m))
         if after == "fired":
             st = subprocess.run([hmc, "--port", port, "status", "--json"], capture_output=True, env=env, cwd=work)
             if not json.loads(st.stdout).get("watchdog", {}).get("fired"):
