@@ -39,7 +39,37 @@ int usage_error(const GlobalOptions& g, const std::string& message) {
   return kExitUsage;
 }
 
+// The command line's values against the protocol's ranges, before the port opens: a value out
+// of range there is a usage error (exit 2) and nothing is sent. False when it was reported.
+bool command_line_valid(const GlobalOptions& g, const Command& command, int& exit_code) {
+  if (Result<Command, Diagnostic> valid = validate(command); !valid) {
+    exit_code = usage_error(g, valid.error().message);
+    return false;
+  }
+  return true;
+}
+
 enum class Motion : uint8_t { kMove, kHome, kStop };
+
+// What the seed firmware's silence leaves known after a motion was sent and its time waited out:
+// positions count from where this hmc found the motor, and a home's or a stop's outcome is unknown.
+std::string seed_result_words(Motion motion, const MotorStatus& motor) {
+  constexpr const char* kSent = "sent; the original firmware confirms nothing";
+  switch (motion) {
+    case Motion::kMove:
+      return std::string(kSent) + " (if it obeyed, it is " + seed_position_words(motor) + ")";
+    case Motion::kHome:
+      return std::string("home ") + kSent + " (if it obeyed, it found its switch within the steps given)";
+    case Motion::kStop:
+      return std::string("stop ") + kSent + ", and where the motor stopped is unknown: it reports no positions";
+  }
+  return kSent;
+}
+
+// What a servo or LED command sent to the seed firmware leaves unknown.
+constexpr const char* kSeedIgnores =
+    ": sent; the original firmware confirms nothing, and it ignores servo and LED commands while a stepper runs "
+    "(which this hmc cannot see of motors an earlier command started)";
 
 // Waits for the motors, then reports each one's end; the exit code says whether all completed.
 int wait_and_report(const GlobalOptions& g, Session& s, const std::vector<uint32_t>& motors, Motion motion) {
@@ -64,17 +94,14 @@ int wait_and_report(const GlobalOptions& g, Session& s, const std::vector<uint32
       continue;
     }
     // Homing halted by the emergency switch ends without its switch too: name the real cause.
-    const char* not_homed = s.model().board.emergency ? "not homed: the emergency switch stopped it"
-                                                       : "not homed: the switch was not found";
-    std::string how = homing ? (motor.homed ? "homed" : not_homed) : "done";
+    std::string how = homing ? (motor.homed ? "homed" : "not homed: " + not_homed_cause(s.model())) : "done";
     if (motion == Motion::kMove && end && *end != MotionEnd::kCompleted) {
       how = std::string("ended early: ") + motion_end_name(*end);
     }
     if (motion == Motion::kStop) how = "stopped";
     if (s.firmware() == Firmware::kSeed) {
-      // Nothing came back: say what was done, and where the motor should be if the board obeyed.
-      std::cout << "motor " << m << ": sent; the original firmware confirms nothing (if it obeyed, "
-                << (homing ? "it is homed, " : "") << position_words(motor) << ")\n";
+      // Nothing came back: say what was sent, and only what follows from it if the board obeyed.
+      std::cout << "motor " << m << ": " << seed_result_words(motion, motor) << '\n';
       continue;
     }
     std::cout << "motor " << m << ": " << how << ", " << position_words(motor) << '\n';
@@ -84,6 +111,33 @@ int wait_and_report(const GlobalOptions& g, Session& s, const std::vector<uint32
 }
 
 // --- send ---------------------------------------------------------------------------------
+
+// The lines of `--raw TEXT` as the board splits them (LF, CR or CRLF); a last line end ends the
+// last line. '' is one blank line.
+std::vector<std::string> raw_lines(const std::string& text) {
+  std::vector<std::string> lines{""};
+  for (size_t i = 0; i < text.size(); ++i) {
+    if (text[i] != '\r' && text[i] != '\n') {
+      lines.back() += text[i];
+      continue;
+    }
+    if (text[i] == '\r' && i + 1 < text.size() && text[i + 1] == '\n') ++i;
+    if (i + 1 < text.size()) lines.emplace_back();
+  }
+  return lines;
+}
+
+void show_reply(const GlobalOptions& g, const Session& s, const BoardFrame& reply) {
+  if (g.json) {
+    std::cout << nlohmann::json{{"reply", s.firmware() == Firmware::kSeed ? nlohmann::json(nullptr)
+                                                                           : board_frame_to_json(reply)}}
+              << '\n';
+  } else if (s.firmware() == Firmware::kSeed) {
+    std::cout << "sent (the seed firmware does not reply)\n";
+  } else {
+    print_board_frame(std::cout, reply);
+  }
+}
 
 void add_send(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   struct Options {
@@ -97,35 +151,49 @@ void add_send(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   cmd->add_option("values", o->values, "the values after a command name");
   cmd->add_flag("--raw", o->raw, "send the first argument's bytes unchanged, unchecked (to see the board refuse)");
   cmd->callback([&g, &exit_code, o] {
-    run_on_board(g, exit_code, [&](Session& s) {
-      SessionResult<BoardFrame> reply = BoardFrame{Ack{}};
-      if (o->raw) {
-        if (!o->values.empty()) return usage_error(g, "--raw takes the line as one argument (quote it)");
-        reply = s.send_line(o->first);
-      } else {
-        std::vector<std::string> words{o->first};
-        words.insert(words.end(), o->values.begin(), o->values.end());
-        Result<Command, Diagnostic> command =
-            o->values.empty() ? command_from_text(o->first) : command_from_words(words);
-        if (!command) {
-          if (g.json) {
-            report_error(g, SessionError{SessionError::Kind::kInvalid, command.error().message, command.error().reason});
-          } else {
-            print_refusal(std::cerr, o->values.empty() ? o->first : "", command.error());
-          }
-          return static_cast<int>(kExitInvalid);
+    if (o->raw && !o->values.empty()) {
+      exit_code = usage_error(g, "--raw takes the line as one argument (quote it)");
+      return;
+    }
+    // A command (not --raw) is read and checked before the port opens: a mistake sends nothing.
+    std::optional<Command> command;
+    if (!o->raw) {
+      std::vector<std::string> words{o->first};
+      words.insert(words.end(), o->values.begin(), o->values.end());
+      Result<Command, Diagnostic> parsed = o->values.empty() ? command_from_text(o->first) : command_from_words(words);
+      if (parsed) parsed = validate(*parsed);
+      if (!parsed) {
+        if (g.json) {
+          report_error(g, SessionError{SessionError::Kind::kInvalid, parsed.error().message, parsed.error().reason});
+        } else {
+          print_refusal(std::cerr, o->values.empty() ? o->first : "", parsed.error());
         }
-        reply = s.execute(*command);
+        exit_code = kExitInvalid;
+        return;
       }
-      if (!reply) return report_error(g, reply.error());
-      if (g.json) {
-        std::cout << nlohmann::json{{"reply", s.firmware() == Firmware::kSeed ? nlohmann::json(nullptr)
-                                                                               : board_frame_to_json(*reply)}}
-                  << '\n';
-      } else if (s.firmware() == Firmware::kSeed) {
-        std::cout << "sent (the seed firmware does not reply)\n";
-      } else {
-        print_board_frame(std::cout, *reply);
+      command = *parsed;
+    }
+    run_on_board(g, exit_code, [&](Session& s) {
+      if (command) {
+        SessionResult<BoardFrame> reply = s.execute(*command);
+        if (!reply) return report_error(g, reply.error());
+        show_reply(g, s, *reply);
+        return static_cast<int>(kExitOk);
+      }
+      // Each line is answered on its own (a blank one not at all): one reply shown per line.
+      for (const std::string& line : raw_lines(o->first)) {
+        if (is_blank(line) && s.firmware() == Firmware::kV2) {
+          if (SessionResult<BoardFrame> sent = s.send_line(line); !sent) return report_error(g, sent.error());
+          if (g.json) {
+            std::cout << nlohmann::json{{"reply", nullptr}} << '\n';
+          } else {
+            std::cout << "sent a blank line: the board answers nothing to it (it only feeds the link watchdog)\n";
+          }
+          continue;
+        }
+        SessionResult<BoardFrame> answered = s.send_line(line);
+        if (!answered) return report_error(g, answered.error());
+        show_reply(g, s, *answered);
       }
       return static_cast<int>(kExitOk);
     });
@@ -160,7 +228,9 @@ void add_stream(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     std::string text;
     for (size_t number = 1; std::getline(in, text); ++number) {
       if (!text.empty() && text.back() == '\r') text.pop_back();
-      if (is_blank(text)) continue;
+      // A comment: a line whose first non-blank byte is '#' (no frame or command begins so).
+      const size_t first = text.find_first_not_of(" \t");
+      if (first == std::string::npos || text[first] == '#') continue;
       Result<Command, Diagnostic> command = command_from_text(text);
       if (!command) {
         std::cerr << o->path << ":" << number << ": ";
@@ -186,7 +256,12 @@ void add_stream(CLI::App& app, const GlobalOptions& g, int& exit_code) {
                          {"seconds", seconds}, {"link_share", share}};
         if (report->refused) {
           j["refused"] = {{"index", *report->refused + 1}, {"line", line_numbers[*report->refused]}, {"why", report->why}};
-          j["refused_after"] = report->refused_after.size();
+          j["refused_after"] = nlohmann::json::array();
+          for (size_t i = 0; i < report->refused_after.size(); ++i) {
+            const size_t k = report->refused_after[i];
+            j["refused_after"].push_back({{"index", k + 1}, {"line", line_numbers[k]}, {"why", report->why_after[i]}});
+          }
+          j["stopped"] = report->stopped;
         }
         std::cout << j << '\n';
       } else {
@@ -203,6 +278,15 @@ void add_stream(CLI::App& app, const GlobalOptions& g, int& exit_code) {
                   << "\n  the " << k << " commands before it were carried out; " << after
                   << " more were already on their way and " << (after - report->refused_after.size())
                   << " of them were carried out; nothing after those was sent\n";
+        for (size_t i = 0; i < report->refused_after.size(); ++i) {
+          const size_t r = report->refused_after[i];
+          std::cerr << "  " << o->path << ":" << line_numbers[r] << " (command " << r + 1
+                    << "), on its way, was refused too: " << report->why_after[i] << '\n';
+        }
+        for (const uint32_t m : report->stopped) {
+          std::cerr << "  motor " << m << ", started by the stream, was stopped: "
+                    << position_words(s.model().motor(m)) << '\n';
+        }
       }
       return static_cast<int>(kExitInvalid);
     });
@@ -282,8 +366,41 @@ void add_move(CLI::App& app, const GlobalOptions& g, int& exit_code) {
       exit_code = profile.error();
       return;
     }
-    if (Result<Axis> known = resolve_axis(o->axis, *profile, BoardModel{}, o->steps_per_rev); !known) {
+    Result<Axis> known = resolve_axis(o->axis, *profile, BoardModel{}, o->steps_per_rev);
+    if (!known) {
       exit_code = usage_error(g, known.error().message);
+      return;
+    }
+    // The rest of the command line too, as far as it does not depend on where the motor is.
+    const auto mistake = [&]() -> std::optional<std::string> {
+      if (o->to || o->by) {
+        if (o->steps || o->degrees || o->revolutions || o->run || o->delay_us || o->rate || o->microstep || o->reverse) {
+          return "--to and --by take the axis's microstep and --speed: no STEPS, --deg, --rev, --run, --delay, --rate, "
+                 "--microstep or --reverse with them";
+        }
+        Result<UnitMove> planned =
+            unit_move(*known, BoardModel{}.motor(known->motor), UnitMoveRequest{o->to, o->by, o->speed, o->accel});
+        if (!planned) return planned.error().message;
+        return std::nullopt;
+      }
+      if (o->speed) return "--speed goes with --to or --by; give STEPS with --delay or --rate";
+      MoveOptions given = *o;
+      given.motor = known->motor;
+      Result<StepperMove> move = move_command(given, o->microstep.value_or(known->microstep));
+      if (!move) return move.error().message;
+      if (Result<Command, Diagnostic> valid = validate(*move); !valid) return valid.error().message;
+      if (o->accel) {
+        std::vector<std::string> notes;
+        Result<uint32_t> steps = accel_steps(*known, *o->accel, notes);
+        if (!steps) return steps.error().message;
+        if (Result<Command, Diagnostic> valid = validate(SetSetting{known->motor, proto::kSettingAccel, *steps}); !valid) {
+          return "--accel: " + valid.error().message;
+        }
+      }
+      return std::nullopt;
+    }();
+    if (mistake) {
+      exit_code = usage_error(g, *mistake);
       return;
     }
     run_on_board(g, exit_code, [&](Session& s) {
@@ -294,10 +411,6 @@ void add_move(CLI::App& app, const GlobalOptions& g, int& exit_code) {
       std::optional<uint32_t> accel;
       Result<StepperMove> move = Error{""};
       if (o->to || o->by) {
-        if (o->steps || o->degrees || o->revolutions || o->run || o->delay_us || o->rate || o->microstep || o->reverse) {
-          return usage_error(g, "--to and --by take the axis's microstep and --speed: no STEPS, --deg, --rev, --run, "
-                                "--delay, --rate, --microstep or --reverse with them");
-        }
         Result<UnitMove> planned = unit_move(*axis, s.model().motor(axis->motor), UnitMoveRequest{o->to, o->by, o->speed, o->accel});
         if (!planned) return usage_error(g, planned.error().message);
         if (std::optional<std::string> refused = beyond_soft_limits(*axis, s.model().motor(axis->motor), planned->target)) {
@@ -313,7 +426,6 @@ void add_move(CLI::App& app, const GlobalOptions& g, int& exit_code) {
         move = *planned->move;
         if (!planned->delay_us) move->delay_us = kDefaultDelayUs;
       } else {
-        if (o->speed) return usage_error(g, "--speed goes with --to or --by; give STEPS with --delay or --rate");
         if (!o->microstep) o->microstep = axis->microstep;
         if (o->accel) {
           Result<uint32_t> steps = accel_steps(*axis, *o->accel, notes);
@@ -351,7 +463,8 @@ void add_move(CLI::App& app, const GlobalOptions& g, int& exit_code) {
       if (g.json) {
         std::cout << nlohmann::json{{"started", command_to_json(*move)}} << '\n';
       } else {
-        std::cout << "started: " << describe(Command{*move}) << '\n';
+        std::cout << (s.firmware() == Firmware::kSeed ? "sent (the original firmware confirms nothing): " : "started: ")
+                  << describe(Command{*move}) << '\n';
       }
       return static_cast<int>(kExitOk);
     });
@@ -376,6 +489,29 @@ void add_home(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   cmd->add_option("--max-steps", o->max_steps, "give up after this many steps (default: no bound)");
   cmd->add_flag("--no-wait", o->no_wait, "start homing one motor and return");
   cmd->callback([&g, &exit_code, o] {
+    // The command line first, with the switches every board of ours has; VER's list below.
+    Result<const Profile*, int> profile_given = use_profile(g);
+    if (!profile_given) {
+      exit_code = profile_given.error();
+      return;
+    }
+    std::vector<uint32_t> switched;
+    for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+      if (proto::motor_has_switches(m)) switched.push_back(m);
+    }
+    Result<std::vector<uint32_t>> named = resolve_motors(o->motors, *profile_given, switched);
+    if (!named) {
+      exit_code = usage_error(g, named.error().message);
+      return;
+    }
+    if (o->no_wait && named->size() > 1) {
+      exit_code = usage_error(g, "--no-wait homes one motor: homing needs the others at rest");
+      return;
+    }
+    if (!command_line_valid(g, StepperMove{named->front(), proto::kActionHome, o->microstep, o->max_steps, o->delay_us},
+                            exit_code)) {
+      return;
+    }
     run_on_board(g, exit_code, [&](Session& s) {
       std::vector<uint32_t> with_switches;
       for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
@@ -386,6 +522,15 @@ void add_home(CLI::App& app, const GlobalOptions& g, int& exit_code) {
       Result<std::vector<uint32_t>> motors = resolve_motors(o->motors, profile, with_switches);
       if (!motors) return usage_error(g, motors.error().message);
       if (o->no_wait && motors->size() > 1) return usage_error(g, "--no-wait homes one motor: homing needs the others at rest");
+      // The seed firmware says nothing, so the end of a seek is known only from a step bound.
+      const bool unbounded_seed = s.firmware() == Firmware::kSeed && o->max_steps == 0;
+      if (unbounded_seed && motors->size() > 1) {
+        return report_error(g, SessionError{SessionError::Kind::kRefused,
+                                            "the original firmware does not say when a homing ends, and ignores a home "
+                                            "while a motor moves: home one motor at a time once the last one rests, or "
+                                            "give --max-steps so hmc can wait out each seek",
+                                            proto::Reason::kMotorsRunning});
+      }
       if (!o->no_wait) {
         if (SessionResult<Done> watched = watch_link(s, g); !watched) return report_error(g, watched.error());
       }
@@ -401,8 +546,13 @@ void add_home(CLI::App& app, const GlobalOptions& g, int& exit_code) {
         }
         SessionResult<BoardFrame> sent = s.execute(home);
         if (!sent) return report_error(g, sent.error());
-        if (o->no_wait) {
-          if (!g.json) std::cout << "motor " << m << ": homing\n";
+        if (o->no_wait || unbounded_seed) {
+          if (!g.json) {
+            std::cout << "motor " << m
+                      << (unbounded_seed ? ": home sent; the original firmware confirms nothing, nor when homing ends "
+                                           "(--max-steps bounds the seek, and hmc waits it out)\n"
+                                         : ": homing\n");
+          }
           return static_cast<int>(kExitOk);
         }
         // The first motor that fails ends it: the next would home under the same fault.
@@ -424,9 +574,17 @@ void add_stop(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   CLI::App* cmd = app.add_subcommand("stop", "stop motors (default: all)");
   cmd->add_option("motor", *motors_text, "1-3, an axis of the profile (several: 1,slide), or all");
   cmd->callback([&g, &exit_code, motors_text] {
+    Result<const Profile*, int> profile = use_profile(g);
+    if (!profile) {
+      exit_code = profile.error();
+      return;
+    }
+    Result<std::vector<uint32_t>> motors = resolve_motors(*motors_text, *profile, {1, 2, 3});
+    if (!motors) {
+      exit_code = usage_error(g, motors.error().message);
+      return;
+    }
     run_on_board(g, exit_code, [&](Session& s) {
-      Result<std::vector<uint32_t>> motors = resolve_motors(*motors_text, profile_in_use(g), {1, 2, 3});
-      if (!motors) return usage_error(g, motors.error().message);
       if (*motors_text == "all") {
         if (SessionResult<Done> stopped = s.stop_all(); !stopped) return report_error(g, stopped.error());
       } else {
@@ -449,6 +607,7 @@ void add_servo(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   cmd->add_option("servo", move->servo, "1 (pan) or 2 (tilt)")->required();
   cmd->add_option("angle", move->angle, "degrees, 10-170 (90 is centre)")->required();
   cmd->callback([&g, &exit_code, move] {
+    if (!command_line_valid(g, *move, exit_code)) return;
     run_on_board(g, exit_code, [&](Session& s) {
       for (const Warning& w : lint(Command{*move})) {
         if (!g.json) std::cerr << "warning: " << w.message << '\n';
@@ -460,7 +619,7 @@ void add_servo(CLI::App& app, const GlobalOptions& g, int& exit_code) {
                                     {"pulse_us", proto::servo_pulse_us(move->angle)}}
                   << '\n';
       } else {
-        std::cout << describe(Command{*move}) << '\n';
+        std::cout << describe(Command{*move}) << (s.firmware() == Firmware::kSeed ? kSeedIgnores : "") << '\n';
       }
       return static_cast<int>(kExitOk);
     });
@@ -477,24 +636,31 @@ void add_led(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   cmd->add_option("strip", o->strip, "1 or 2")->required();
   cmd->add_option("colour", o->colour, "R G B W, or #RRGGBBWW, or off")->required();
   cmd->callback([&g, &exit_code, o] {
-    run_on_board(g, exit_code, [&](Session& s) {
-      Result<LedColor> led = Error{"give the colour as R G B W (four numbers 0-255), #RRGGBB[WW], or off"};
-      if (o->colour.size() == 1) {
-        led = parse_led_colour(o->strip, o->colour[0]);
-      } else if (o->colour.size() == 4) {
-        std::vector<std::string> words{"LED", std::to_string(o->strip)};
-        words.insert(words.end(), o->colour.begin(), o->colour.end());
-        Result<Command, Diagnostic> command = command_from_words(words);
-        if (!command) return usage_error(g, command.error().message);
-        led = std::get<LedColor>(*command);
+    Result<LedColor> led = Error{"give the colour as R G B W (four numbers 0-255), #RRGGBB[WW], or off"};
+    if (o->colour.size() == 1) {
+      led = parse_led_colour(o->strip, o->colour[0]);
+    } else if (o->colour.size() == 4) {
+      std::vector<std::string> words{"LED", std::to_string(o->strip)};
+      words.insert(words.end(), o->colour.begin(), o->colour.end());
+      Result<Command, Diagnostic> command = command_from_words(words);
+      if (!command) {
+        exit_code = usage_error(g, command.error().message);
+        return;
       }
-      if (!led) return usage_error(g, led.error().message);
+      led = std::get<LedColor>(*command);
+    }
+    if (!led) {
+      exit_code = usage_error(g, led.error().message);
+      return;
+    }
+    if (!command_line_valid(g, *led, exit_code)) return;
+    run_on_board(g, exit_code, [&](Session& s) {
       SessionResult<BoardFrame> sent = s.execute(*led);
       if (!sent) return report_error(g, sent.error());
       if (g.json) {
         std::cout << command_to_json(Command{*led}) << '\n';
       } else {
-        std::cout << describe(Command{*led}) << '\n';
+        std::cout << describe(Command{*led}) << (s.firmware() == Firmware::kSeed ? kSeedIgnores : "") << '\n';
       }
       return static_cast<int>(kExitOk);
     });
@@ -586,7 +752,7 @@ void add_monitor(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   auto seconds = std::make_shared<double>(0);
   CLI::App* cmd = app.add_subcommand("monitor", "show every reply and event the board sends, decoded, with times");
   cmd->add_option("--duration", *seconds, "stop after this many seconds (default: until Ctrl-C)")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
   cmd->callback([&g, &exit_code, seconds] {
     // Lines are shown as the session reads them, from when it is open (not its own queries).
     auto started = std::make_shared<Clock::time_point>();

@@ -344,7 +344,7 @@ if port=$(tcp_port seed) && cport=$(control_port seed); then
   expect seed-status 0 'seed firmware' -- "$hmc" -p "$board" --firmware seed status
   expect seed-status-json 0 '"firmware": "seed"' -- "$hmc" -p "$board" --firmware seed status --json
   t0=$(ms)
-  expect seed-move 0 '^motor 1: sent; the original firmware confirms nothing \(if it obeyed, at 400 steps of 1/16' -- \
+  expect seed-move 0 '^motor 1: sent; the original firmware confirms nothing \(if it obeyed, it is 400 steps of 1/16 from where this hmc found it' -- \
     "$hmc" -p "$board" --firmware seed move 1 400 --delay 1000 --wait
   took=$(($(ms) - t0))
   check_true "seed move --wait took ${took} ms" "400 steps at 1000 us must take at least 400 ms" test "$took" -ge 400
@@ -352,7 +352,7 @@ if port=$(tcp_port seed) && cport=$(control_port seed); then
   check_match "seed: the motor rests where hmc says" '"motor":1,"pos":211200,.*"state":"idle"' \
     "$(control "$cport" status)"
   t0=$(ms)
-  expect seed-move-given 0 'confirms nothing \(if it obeyed, at 400 steps of 1/16' -- \
+  expect seed-move-given 0 'confirms nothing \(if it obeyed, it is 400 steps of 1/16 from where this hmc found it' -- \
     "$hmc" -p "$board" --firmware seed move 1 400 --delay 1000 --wait
   took=$(($(ms) - t0))
   check_true "seed move --wait (--firmware seed, no VER) took ${took} ms" "at least 400 ms" test "$took" -ge 400

@@ -3,6 +3,7 @@
 
 #include <signal.h>
 
+#include <cstdlib>
 #include <iostream>
 
 #include "axis_units.h"
@@ -40,6 +41,7 @@ const char* kind_name(SessionError::Kind kind) {
     case SessionError::Kind::kLink: return "link";
     case SessionError::Kind::kInterrupted: return "interrupted";
     case SessionError::Kind::kTooOld: return "firmware_too_old";
+    case SessionError::Kind::kEnded: return "ended_early";
   }
   return "link";
 }
@@ -53,6 +55,7 @@ int exit_code_of(SessionError::Kind kind) {
     case SessionError::Kind::kNoReply: return kExitNoReply;
     case SessionError::Kind::kLink: return kExitIo;
     case SessionError::Kind::kInterrupted: return kExitInterrupted;
+    case SessionError::Kind::kEnded: return kExitIncomplete;
   }
   return kExitIo;
 }
@@ -97,6 +100,17 @@ void add_global_options(CLI::App& app, GlobalOptions& o) {
 }
 
 bool interrupt_requested() { return g_interrupted != 0; }
+
+CLI::Validator positive_number() {
+  return CLI::Validator(
+      [](const std::string& text) {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        const bool number = !text.empty() && end != nullptr && *end == '\0';
+        return number && value > 0 ? std::string() : "must be a number above 0, not '" + text + "'";
+      },
+      "NUMBER > 0");
+}
 
 SessionResult<Done> watch_link(Session& s, const GlobalOptions& o) {
   // sim://'s board runs only inside hmc: when hmc dies its time stops too, so nothing runs on
@@ -183,17 +197,27 @@ std::string position_words(const MotorStatus& m) {
          steps_text(m.position) + " full steps)";
 }
 
+std::string seed_position_words(const MotorStatus& m) {
+  return steps_text(m.position * m.microstep) + " steps of 1/" + std::to_string(m.microstep) +
+         " from where this hmc found it";
+}
+
 nlohmann::json motor_to_json(const MotorStatus& m, const std::optional<MotionEnd>& last_end) {
+  // Steps of the microstep: a whole number, unless the position falls between two of them.
+  const int64_t units = static_cast<int64_t>(m.position) * m.microstep;
+  const nlohmann::json steps = units % 256 == 0 ? nlohmann::json(units / 256) : nlohmann::json(static_cast<double>(units) / 256.0);
   return {{"motor", m.motor},
           {"state", motor_state_name(m.state)},
           {"position", m.position},
-          {"steps", static_cast<double>(m.position) * m.microstep / 256.0},
+          {"steps", steps},
           {"target", m.target},
           {"microstep", m.microstep},
           {"rate", m.rate},
           {"homed", m.homed},
-          {"endless", m.endless},
-          {"switches", {{"reverse", (m.switches & 1u) != 0}, {"forward", (m.switches & 2u) != 0}}},
+          {"endless", m.endless && m.state != MotorState::kIdle},  // a resting motor runs toward nothing
+          {"switches", proto::motor_has_switches(m.motor)
+                           ? nlohmann::json{{"reverse", (m.switches & 1u) != 0}, {"forward", (m.switches & 2u) != 0}}
+                           : nlohmann::json(nullptr)},
           {"last_end", last_end ? nlohmann::json(motion_end_name(*last_end)) : nlohmann::json(nullptr)}};
 }
 

@@ -45,6 +45,10 @@ std::unique_ptr<Session> connect(const GlobalOptions& options, int& exit_code, L
 // firmware, protocol 2) gets a note on standard error and the command goes on.
 SessionResult<Done> watch_link(Session& session, const GlobalOptions& options);
 
+// A number above 0, refused in words ("must be above 0, not '-1'"), not with CLI11's range that
+// writes out the largest double.
+CLI::Validator positive_number();
+
 // Raised by SIGINT, SIGTERM and SIGHUP; a session's waits poll it.
 bool interrupt_requested();
 
@@ -57,5 +61,7 @@ nlohmann::json motor_to_json(const MotorStatus& motor, const std::optional<Motio
 
 // "a: 3200 steps of 1/16 (200 full steps)" for people.
 std::string position_words(const MotorStatus& motor);
+// The seed firmware reports no positions: "400 steps of 1/16 from where this hmc found it".
+std::string seed_position_words(const MotorStatus& motor);
 
 }  // namespace hmc::cli

@@ -30,6 +30,7 @@
 #include <thread>
 #include <vector>
 
+#include "connection.h"
 #include "exit_codes.h"
 #include "hmc/session.h"
 #include "hmc/transport.h"
@@ -657,7 +658,7 @@ void add_flash_command(CLI::App& app, int& exit_code) {
                     "After writing, ask VER on this port (the board's command UART, e.g. /dev/ttyUSB0; or tcp:, sim://) "
                     "and check it against the image's versions");
   flash->add_option("--ver-wait", options->ver_wait_s, "Seconds to keep asking VER while the board restarts")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->capture_default_str();
   flash->add_flag("--dry-run,-n", options->dry_run, "Print the commands and actions, one per line, and run nothing");
   flash->callback([options, &exit_code] {

@@ -277,8 +277,14 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
   CLI::App* cmd = app.add_subcommand("run", "run a motion file on the board (validated first; Ctrl-C stops every motor)");
   cmd->add_option("file", o->path, "the motion file")->required();
   cmd->add_flag("--dry-run", o->dry_run, "print the timeline and the exact frames; no board");
-  cmd->add_option("--from", o->from, "start at this step (as numbered by the plan; after an interruption)")
-      ->check(CLI::PositiveNumber);
+  cmd->add_option("--from", o->from, "start at this step (as numbered by the plan, from 1; after an interruption)")
+      ->check(CLI::Validator(
+          [](const std::string& text) {
+            return text.find_first_not_of("0123456789") == std::string::npos && text.find_first_not_of('0') != std::string::npos
+                       ? std::string()
+                       : "--from takes a step number, 1 or more, not '" + text + "'";
+          },
+          "STEP"));
   cmd->add_option("--at", o->at,
                   "with --from: where motors 1,2,3 were (steps; - unknown) when the file first started, as the "
                   "interrupted run printed; they are first moved to where the plan has them at that step");
@@ -395,6 +401,13 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     }
     if (g.json) {
       std::cout << nlohmann::json{{"completed", report.completed}, {"state", model_to_json(*session)}} << '\n';
+    } else if (session->firmware() == Firmware::kSeed) {
+      // Nothing came back: what was sent, and where the motors are only if the board obeyed.
+      std::cout << "sent every step (" << report.completed << "); the original firmware confirms nothing";
+      for (const motion::MotorTrack& t : plan->tracks) {
+        std::cout << "; if it obeyed, " << t.name << " is " << seed_position_words(session->model().motor(t.motor));
+      }
+      std::cout << '\n';
     } else {
       std::cout << "done: " << report.completed << " steps";
       for (const motion::MotorTrack& t : plan->tracks) {

@@ -223,6 +223,7 @@ void raise_session_error(const SessionError& error) {
     case SessionError::Kind::kNoReply: raise(x.no_reply, error.message);
     case SessionError::Kind::kLink: raise(x.link_lost, error.message);
     case SessionError::Kind::kInterrupted: raise(PyExc_KeyboardInterrupt, error.message);
+    case SessionError::Kind::kEnded: raise(x.ended_early, error.message);
   }
   raise(x.error, error.message);
 }

@@ -71,12 +71,9 @@ struct ControllerOptions {
   bool self_test = true;   // at boot: each stepper half a turn forward and back, servos centred
 };
 
-// Sum of the commanded step rates of all moving motors the step interrupt is given, in steps/s.
-// Set from the two-interrupt scheduler's cost (≈ 750 cycles a step at constant rate, ≈ 1 170
-// with three motors ramping: near 80 % of the 48 MHz M0+ at these sums) and kept for the step
-// engine (step_engine.h) until its cost is measured in cycles (docs/performance.md).
-inline constexpr uint32_t kMaxStepRate = 50000;
-inline constexpr uint32_t kMaxRampingStepRate = 40000;  // when any moving motor ramps
+// Sum of the commanded step rates of all moving motors the step interrupt is given, in steps/s
+// (proto::step_budget: the host explains refusals with the same numbers).
+inline constexpr uint32_t kMaxStepRate = proto::kMaxStepRate;
 
 // Homing with delay 0 uses the setting home_seek_us (500 µs at boot), microstep 0 keeps the
 // current microstep (the spec's `STX#6#STM#1#3#0#0#0#4#ETX`). Current and decay at boot are the

@@ -12,14 +12,19 @@ constexpr uint8_t kTokenDir = proto::kTokenFirstValue + 1;
 constexpr uint8_t kTokenSteps = proto::kTokenFirstValue + 3;
 constexpr uint8_t kTokenDelay = proto::kTokenFirstValue + 4;
 
+// The delay range the host is told of is the step timer's.
+static_assert(proto::kShortestDelayUs * hal::kTicksPerMicrosecond == kMinIntervalTicks, "shortest delay");
+static_assert(uint64_t{proto::kLongestDelayUs} * hal::kTicksPerMicrosecond <= 0xFFFFFFFFu &&
+                  uint64_t{proto::kLongestDelayUs + 1} * hal::kTicksPerMicrosecond > 0xFFFFFFFFu,
+              "longest delay: the most a 32-bit interval holds");
+
 // Ticks per step for `delay_us`, or 0 when the timer cannot produce it.
 uint32_t interval_for(uint32_t delay_us) {
-  const uint64_t ticks = static_cast<uint64_t>(delay_us) * hal::kTicksPerMicrosecond;
-  if (ticks < kMinIntervalTicks || ticks > 0xFFFFFFFFu) return 0;
-  return static_cast<uint32_t>(ticks);
+  if (!proto::delay_in_range(delay_us)) return 0;
+  return delay_us * hal::kTicksPerMicrosecond;
 }
 
-uint32_t rate_for(uint32_t delay_us) { return (1000000u + delay_us - 1u) / delay_us; }
+uint32_t rate_for(uint32_t delay_us) { return proto::step_rate(delay_us); }
 
 uint32_t how_from(MoveEnd end) {
   return end == MoveEnd::kCompleted ? proto::kEndCompleted : proto::kEndStopped;
@@ -206,7 +211,7 @@ bool Controller::within_budget(uint8_t motor, uint32_t rate, uint32_t accel) con
     sum += other_rate;
     ramping = ramping || mo.settings[proto::kSettingAccel - 1] != 0;
   }
-  return sum <= (ramping ? kMaxRampingStepRate : kMaxStepRate);
+  return sum <= proto::step_budget(ramping);
 }
 
 bool Controller::any_moving() const {

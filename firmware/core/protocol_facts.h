@@ -218,6 +218,23 @@ enum SettingId : uint8_t {
 };
 static_assert(kSettingHomeLocate == kSettingCount, "one SettingId per kSettings entry");
 
+// Step rates our firmware can time (controller_motion.cpp applies them; the host names the one a
+// `rate_limit` refusal broke, with these numbers). A move's rate is 1 000 000 / delay_us steps/s,
+// rounded up; it must also stay within the motor's max_rate setting.
+// The step interrupt's budget, summed over the moving motors: set from the two-interrupt
+// scheduler's cost (≈ 750 cycles a step at constant rate, ≈ 1 170 with three motors ramping: near
+// 80 % of the 48 MHz M0+ at these sums; docs/performance.md). VER reports the first as max_rate.
+inline constexpr uint32_t kMaxStepRate = 50000;
+inline constexpr uint32_t kMaxRampingStepRate = 40000;  // when any moving motor ramps
+// The step timer's shortest and longest interval at 48 ticks a µs: 240 ticks, 2^32 - 1 ticks.
+inline constexpr uint32_t kShortestDelayUs = 5;
+inline constexpr uint32_t kLongestDelayUs = 89478485;
+constexpr bool delay_in_range(uint32_t delay_us) {
+  return delay_us >= kShortestDelayUs && delay_us <= kLongestDelayUs;
+}
+constexpr uint32_t step_rate(uint32_t delay_us) { return (1000000u + delay_us - 1u) / delay_us; }
+constexpr uint32_t step_budget(bool ramping) { return ramping ? kMaxRampingStepRate : kMaxStepRate; }
+
 // STA's units.
 inline constexpr uint32_t kUnitBoard = 4;        // switches, emergency, servos
 inline constexpr uint32_t kUnitFirstStrip = 5;   // 5 and 6: LED strips 1 and 2

@@ -6,7 +6,8 @@
 //   w TICK HEX                                       a write: the virtual tick it was sent at, its bytes
 //   e TICK                                           a command disconnected at that tick
 // Ticks only grow. The board is deterministic, so booting it and sending every write at its tick
-// rebuilds exactly the state the last command left; virtual time does not pass between commands.
+// rebuilds exactly the state the last command left; virtual time does not pass between commands,
+// except that lines the last command left unanswered are answered (to nobody) before the next.
 #include "hmc/sim_transport.h"
 
 #include <errno.h>
@@ -476,6 +477,11 @@ Result<std::unique_ptr<Transport>> open_sim_port(std::string_view url, const Por
       (void)board->take_output();
     }
     board->run_until(journal->end);
+    // Lines that command sent and let go of before their answers came are read and answered
+    // now, to nobody: a reply left over must never be taken for the answer to this command's
+    // lines. (Deterministic: a later replay passes through the same ticks.)
+    while (board->receiving()) board->run_until(board->next_event());
+    board->run_for(sim::kPollTicks);  // the main loop handles the last line
     board->drop_output();
   }
 

@@ -12,6 +12,22 @@ constexpr uint32_t kReturnDelayUs = 500;
 
 StepperMove stage_command(const Stage& s) { return StepperMove{s.motor, s.dir, s.microstep, s.steps, s.delay_us}; }
 
+SessionError ended_early(std::string what) {
+  return SessionError{SessionError::Kind::kEnded, std::move(what), proto::Reason::kOk};
+}
+
+// A move of `motors` that ended before its end (a switch, the emergency switch): the rest of the
+// plan assumed it did not.
+SessionResult<Done> moves_completed(const Session& session, const std::vector<uint32_t>& motors) {
+  for (const uint32_t m : motors) {
+    const std::optional<MotionEnd>& end = session.model().last_end[m - 1];
+    if (end && *end != MotionEnd::kCompleted) {
+      return ended_early("motor " + std::to_string(m) + "'s move ended early (" + motion_end_name(*end) + ")");
+    }
+  }
+  return Done{};
+}
+
 }  // namespace
 
 std::array<std::optional<int64_t>, proto::kMotorCount> planned_positions(const Plan& plan, size_t index) {
@@ -90,12 +106,19 @@ SessionResult<Done> MotionRunner::run_action(const Action& action) {
   switch (action.kind) {
     case ActionKind::kMove:
       if (SessionResult<Done> started = start_stages(action.stages); !started) return started;
-      return action.wait_for_motors ? wait_motors(action.motors) : SessionResult<Done>(Done{});
+      if (!action.wait_for_motors) return Done{};
+      if (SessionResult<Done> waited = wait_motors(action.motors); !waited) return waited;
+      return moves_completed(session_, action.motors);
     case ActionKind::kHome:
       // One motor after another: homing needs every motor at rest.
       for (const Command& c : action.commands) {
         if (SessionResult<BoardFrame> r = session_.execute(c); !r) return r.error();
-        if (SessionResult<Done> homed = wait_motors({std::get<StepperMove>(c).motor}); !homed) return homed;
+        const uint32_t m = std::get<StepperMove>(c).motor;
+        if (SessionResult<Done> homed = wait_motors({m}); !homed) return homed;
+        // The seed firmware reports nothing; ours says whether the switch was found.
+        if (session_.firmware() == Firmware::kV2 && !session_.model().motor(m).homed) {
+          return ended_early("motor " + std::to_string(m) + " not homed: " + not_homed_cause(session_.model()));
+        }
       }
       return Done{};
     case ActionKind::kStop:
@@ -144,9 +167,7 @@ SessionResult<Done> MotionRunner::feed() {
     const std::optional<MotionEnd>& end = session_.model().last_end[m - 1];
     if (end && *end != MotionEnd::kCompleted) {
       q.clear();
-      return SessionError{SessionError::Kind::kRefused,
-                          "motor " + std::to_string(m) + "'s move ended early (" + motion_end_name(*end) + ")",
-                          proto::Reason::kOk};
+      return ended_early("motor " + std::to_string(m) + "'s move ended early (" + motion_end_name(*end) + ")");
     }
     const Stage next = q.front();
     q.pop_front();

@@ -161,8 +161,8 @@ SessionResult<Done> Session::detect_firmware() {
       mode_ = proto::ChecksumMode::kSum;
       return Done{};
     }
-    const BoardFrame reply = pending_replies_.front();
-    pending_replies_.erase(pending_replies_.begin());
+    const BoardFrame reply = pending_replies_.front().frame;
+    pending_replies_.pop_front();
     if (const Version* v = std::get_if<Version>(&reply)) {
       firmware_ = Firmware::kV2;
       version_ = *v;
@@ -202,7 +202,7 @@ SessionResult<Done> Session::write_line(const std::string& line, std::optional<C
   if (firmware_ == Firmware::kSeed) {
     if (command) apply_sent(*command);
   } else if (!is_blank(line)) {
-    in_flight_.push_back(InFlight{std::move(command), line.size() + 1});
+    in_flight_.push_back(InFlight{std::move(command), line.size() + 1, ++lines_written_});
     in_flight_bytes_ += line.size() + 1;
   }
   return Done{};
@@ -244,22 +244,27 @@ SessionResult<std::vector<BoardFrame>> Session::pump(Millis timeout) {
     if (!is_event(*frame)) {
       // The reply to the oldest line in flight: an accepted command changes the model now,
       // before any event that follows it in the stream.
+      uint64_t answered = 0;
       if (!in_flight_.empty()) {
         const InFlight& oldest = in_flight_.front();
         if (oldest.command && std::holds_alternative<Ack>(*frame)) apply_sent(*oldest.command);
+        answered = oldest.line;
         in_flight_bytes_ -= oldest.bytes;
         in_flight_.pop_front();
       }
-      pending_replies_.push_back(*frame);
+      pending_replies_.push_back(Reply{answered, *frame});
     }
     frames.push_back(std::move(*frame));
   }
   return frames;
 }
 
-SessionResult<BoardFrame> Session::await_reply(std::string_view sent) {
+SessionResult<BoardFrame> Session::await_reply(std::string_view sent, uint64_t line) {
   const Clock::time_point deadline = Clock::now() + options_.reply_timeout;
-  while (pending_replies_.empty()) {
+  const auto pass_over_earlier = [&] {
+    while (!pending_replies_.empty() && pending_replies_.front().line < line) pending_replies_.pop_front();
+  };
+  for (pass_over_earlier(); pending_replies_.empty(); pass_over_earlier()) {
     if (Clock::now() >= deadline) {
       return make_error(SessionError::Kind::kNoReply,
                         "no reply from the board within " + std::to_string(options_.reply_timeout.count()) +
@@ -268,8 +273,8 @@ SessionResult<BoardFrame> Session::await_reply(std::string_view sent) {
     const auto left = std::chrono::duration_cast<Millis>(deadline - Clock::now());
     if (SessionResult<std::vector<BoardFrame>> got = pump(std::min(left + Millis{1}, kSlice)); !got) return got.error();
   }
-  BoardFrame reply = pending_replies_.front();
-  pending_replies_.erase(pending_replies_.begin());
+  BoardFrame reply = pending_replies_.front().frame;
+  pending_replies_.pop_front();
   return reply;
 }
 
@@ -318,10 +323,16 @@ SessionResult<BoardFrame> Session::execute(const Command& command) {
   const Result<std::string, Diagnostic> frame = encode(command, mode_);
   if (SessionResult<Done> sent = write_line(frame.value(), command); !sent) return sent.error();
   if (firmware_ == Firmware::kSeed) return BoardFrame{Ack{}};
-  SessionResult<BoardFrame> reply = await_reply(frame.value());
+  SessionResult<BoardFrame> reply = await_reply(frame.value(), lines_written_);
   if (!reply) return reply;
   if (const Nak* nak = std::get_if<Nak>(&reply.value())) {
-    SessionError refused = make_error(SessionError::Kind::kNak, explain_refusal(nak->reason, &command, model_), nak->reason);
+    const auto* move = std::get_if<StepperMove>(&command);
+    const Reason reason = nak->reason;
+    SessionError refused = make_error(SessionError::Kind::kNak,
+                                      reason == Reason::kRateLimit && move != nullptr
+                                          ? explain_rate_limit(*move)
+                                          : explain_refusal(reason, &command, model_),
+                                      reason);
     refused.nak = *nak;
     return refused;
   }
@@ -338,12 +349,17 @@ SessionResult<BoardFrame> Session::send_line(std::string_view line) {
   if (SessionResult<Done> sent = write_line(text, command); !sent) return sent.error();
   if (firmware_ == Firmware::kSeed) return BoardFrame{Ack{}};
   if (is_blank(text)) return BoardFrame{Ack{}};  // a blank line gets no reply
-  SessionResult<BoardFrame> reply = await_reply(text);
+  SessionResult<BoardFrame> reply = await_reply(text, lines_written_);
   if (!reply) return reply;
   if (const Nak* nak = std::get_if<Nak>(&reply.value())) {
+    const StepperMove* move = decoded ? std::get_if<StepperMove>(&decoded->command) : nullptr;
+    const Reason reason = nak->reason;
     SessionError refused = make_error(SessionError::Kind::kNak,
-                                      explain_refusal(nak->reason, decoded ? &decoded->command : nullptr, model_) +
-                                          " (token " + std::to_string(nak->token) + ", byte " + std::to_string(nak->offset) + ")",
+                                      (reason == Reason::kRateLimit && move != nullptr
+                                           ? explain_rate_limit(*move)
+                                           : explain_refusal(reason, decoded ? &decoded->command : nullptr, model_)) +
+                                          " (token " + std::to_string(nak->token) + ", byte " +
+                                          std::to_string(nak->offset) + ")",
                                       nak->reason);
     refused.nak = *nak;
     return refused;
@@ -404,21 +420,25 @@ SessionResult<Done> Session::wait(const std::function<bool()>& done, std::option
   }
 }
 
-SessionResult<Done> Session::stop_all() {
+SessionResult<Done> Session::stop_all() { return stop({1, 2, 3}); }
+
+SessionResult<Done> Session::stop(const std::vector<uint32_t>& motors) {
   // Stops go out first, all of them, then the replies are read: the motors halt together.
   std::vector<std::string> sent;
-  for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+  std::vector<uint64_t> numbers;
+  for (const uint32_t m : motors) {
     const StepperMove stop{m, proto::kActionStop, 0, 0, 0};
     const std::string frame = encode(stop, mode_).value();
     if (SessionResult<Done> written = write_line(frame, Command{stop}); !written) return written.error();
     sent.push_back(frame);
+    numbers.push_back(lines_written_);
   }
-  for (uint32_t m = 1; m <= proto::kMotorCount && firmware_ == Firmware::kV2; ++m) {
-    SessionResult<BoardFrame> reply = await_reply(sent[m - 1]);
+  for (size_t i = 0; i < sent.size() && firmware_ == Firmware::kV2; ++i) {
+    SessionResult<BoardFrame> reply = await_reply(sent[i], numbers[i]);
     if (!reply) return reply.error();
   }
   if (firmware_ == Firmware::kV2) {
-    for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+    for (const uint32_t m : motors) {
       if (SessionResult<BoardFrame> status = execute(StatusQuery{m}); !status) return status.error();
     }
     // A motor with an acceleration brakes: its position is final only once its end event came.
@@ -480,7 +500,14 @@ SessionResult<Session::StreamReport> Session::stream(const std::vector<Command>&
   }
   const size_t window = version_ && version_->line_max > 0 ? version_->line_max : proto::kLineMax;
   pending_replies_.clear();
-  std::deque<size_t> waiting;  // indices of this stream's lines not yet answered, oldest first
+  struct Waiting {
+    size_t index;   // in `commands`
+    uint64_t line;  // the line's number in the session
+  };
+  std::deque<Waiting> waiting;  // this stream's lines not yet answered, oldest first
+  std::vector<Reason> reasons_after;  // why each of report.refused_after was refused
+  std::optional<Reason> reason;       // why report.refused was
+  std::vector<bool> started(proto::kMotorCount, false);  // motors an accepted line set moving
   size_t next = 0;
   Clock::time_point last_reply = Clock::now();
   while ((!report.refused && next < lines.size()) || !waiting.empty()) {
@@ -492,33 +519,58 @@ SessionResult<Session::StreamReport> Session::stream(const std::vector<Command>&
     };
     while (!report.refused && next < lines.size() && room()) {
       if (SessionResult<Done> sent = write_line(lines[next], commands[next]); !sent) return sent.error();
-      waiting.push_back(next++);
+      waiting.push_back(Waiting{next++, lines_written_});
       ++report.sent;
     }
-    if (SessionResult<std::vector<BoardFrame>> got = pump(Millis{5}); !got) return got.error();
+    // A board that stops answering or a link that fails mid-stream: the motors are sent a stop.
+    if (SessionResult<std::vector<BoardFrame>> got = pump(Millis{5}); !got) return stopping(got.error());
     if (!pending_replies_.empty()) last_reply = Clock::now();
     while (!pending_replies_.empty() && !waiting.empty()) {
-      const BoardFrame reply = pending_replies_.front();
-      pending_replies_.erase(pending_replies_.begin());
-      const size_t index = waiting.front();
+      const Reply answer = pending_replies_.front();
+      pending_replies_.pop_front();
+      if (answer.line < waiting.front().line) continue;  // an earlier line's, late
+      const BoardFrame& reply = answer.frame;
+      const size_t index = waiting.front().index;
       waiting.pop_front();
       if (const Nak* nak = std::get_if<Nak>(&reply)) {
+        // Explained once the stream is over: explaining may ask the board.
         if (!report.refused) {
           report.refused = index;
-          report.why = explain_refusal(nak->reason, &commands[index], model_);
+          reason = nak->reason;
         } else {
           report.refused_after.push_back(index);
+          reasons_after.push_back(nak->reason);
         }
       } else {
         ++report.accepted;
+        const auto* move = std::get_if<StepperMove>(&commands[index]);
+        if (move != nullptr && move->dir != proto::kActionStop) started[move->motor - 1] = true;
       }
     }
     if (!waiting.empty() && Clock::now() - last_reply > options_.reply_timeout) {
-      return make_error(SessionError::Kind::kNoReply,
+      return stopping(make_error(SessionError::Kind::kNoReply,
                         "no reply from the board within " + std::to_string(options_.reply_timeout.count()) +
-                            " ms while streaming (line " + std::to_string(waiting.front() + 1) + " of " +
-                            std::to_string(lines.size()) + " unanswered)");
+                            " ms while streaming (line " + std::to_string(waiting.front().index + 1) + " of " +
+                            std::to_string(lines.size()) + " unanswered); every motor was sent a stop"));
     }
+  }
+  if (!report.refused) return report;
+  // Explained while the board is as it was when it refused (a rate refusal asks it for numbers).
+  const auto why = [&](size_t index, Reason r) {
+    const auto* move = std::get_if<StepperMove>(&commands[index]);
+    return r == Reason::kRateLimit && move != nullptr ? explain_rate_limit(*move)
+                                                      : explain_refusal(r, &commands[index], model_);
+  };
+  report.why = why(*report.refused, *reason);
+  for (size_t i = 0; i < report.refused_after.size(); ++i) {
+    report.why_after.push_back(why(report.refused_after[i], reasons_after[i]));
+  }
+  // Giving up never leaves a motor running: what the stream started is stopped.
+  for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+    if (started[m - 1]) report.stopped.push_back(m);
+  }
+  if (!report.stopped.empty()) {
+    if (SessionResult<Done> stopped = stop(report.stopped); !stopped) return stopped.error();
   }
   return report;
 }

@@ -86,8 +86,9 @@ std::string explain_refusal(Reason reason, const Command* command, const BoardMo
       return "the board keeps the seed's rule: servo and LED commands are ignored while a stepper runs; wait "
              "until it stops (`hmc move ... --wait`)";
     case Reason::kRateLimit:
-      return "the moving motors together would step faster than the board can time (its budget is the sum of "
-             "their rates): use a longer delay, or wait for the other motors";
+      // Session::explain_rate_limit names the limit with numbers, asking the board for them.
+      return "the step rate is beyond what the board can time (its delay range, the motor's max_rate, or its "
+             "budget for the moving motors together): use a longer delay, or wait for the other motors";
     case Reason::kSoftLimit:
       return (move != nullptr ? motor_name(move->motor) + "'s" : std::string("the motor's")) +
              " move would end outside its soft travel limits (LIM)";
@@ -97,6 +98,67 @@ std::string explain_refusal(Reason reason, const Command* command, const BoardMo
     default:
       return std::string("the board refused the line: ") + proto::reason_spec(reason).text;
   }
+}
+
+std::string not_homed_cause(const BoardModel& model) {
+  return model.board.emergency ? "the emergency switch stopped it" : "the switch was not found";
+}
+
+std::string Session::explain_rate_limit(const StepperMove& move) {
+  const std::string who = motor_name(move.motor);
+  const auto setting = [&](uint32_t motor, uint32_t id) -> std::optional<uint32_t> {
+    SessionResult<BoardFrame> got = execute(GetSetting{motor, id});
+    const SettingValue* value = got ? std::get_if<SettingValue>(&got.value()) : nullptr;
+    if (value == nullptr) return std::nullopt;
+    return value->value;
+  };
+  const bool homing = move.dir == proto::kActionHome;
+  uint32_t delay = move.delay_us;
+  if (homing && delay == 0) delay = setting(move.motor, proto::kSettingHomeSeek).value_or(0);
+  if (!proto::delay_in_range(delay)) {
+    return who + "'s delay of " + std::to_string(delay) + " us per step is " +
+           (delay < proto::kShortestDelayUs ? "shorter than the shortest" : "longer than the longest") +
+           " the board's step timer makes: give " + std::to_string(proto::kShortestDelayUs) + "-" +
+           std::to_string(proto::kLongestDelayUs) + " us";
+  }
+  const uint32_t rate = proto::step_rate(delay);
+  const std::string its_rate = who + " would step at " + std::to_string(rate) + " steps/s (" + std::to_string(delay) + " us a step)";
+  if (!homing) {
+    if (const std::optional<uint32_t> most = setting(move.motor, proto::kSettingMaxRate); most && rate > *most) {
+      return its_rate + ", above its max_rate setting of " + std::to_string(*most) + " steps/s: give a delay of " +
+             std::to_string(proto::step_rate(*most)) + " us or more (or raise it: SET " + std::to_string(move.motor) +
+             " " + std::to_string(proto::kSettingMaxRate) + " RATE)";
+    }
+  }
+  // The step interrupt's budget, shared by every moving motor: ask how fast the others go.
+  uint32_t sum = rate;
+  const uint32_t accel = homing ? 0 : setting(move.motor, proto::kSettingAccel).value_or(0);
+  bool ramping = accel != 0;
+  std::string others;
+  for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+    if (m == move.motor || model_.motor(m).state == MotorState::kIdle) continue;
+    if (SessionResult<BoardFrame> status = execute(StatusQuery{m}); !status) continue;
+    if (model_.motor(m).state == MotorState::kIdle) continue;
+    sum += model_.motor(m).rate;
+    ramping = ramping || setting(m, proto::kSettingAccel).value_or(0) != 0;
+    others += ", " + motor_name(m) + " at " + std::to_string(model_.motor(m).rate) + " now";
+  }
+  const uint32_t budget = proto::step_budget(ramping);
+  const std::string which = ramping ? "its budget while any moving motor ramps, " + std::to_string(budget) +
+                                          " steps/s (" + std::to_string(proto::kMaxStepRate) + " at constant rate)"
+                                    : "its budget of " + std::to_string(budget) + " steps/s";
+  if (others.empty()) {
+    if (rate > budget) {
+      return its_rate + (ramping ? " ramping (accel " + std::to_string(accel) + " steps/s^2)" : std::string()) +
+             ", above what the board can time: " + which + ": give a delay of " +
+             std::to_string(proto::step_rate(budget)) + " us or more" + (ramping ? ", or accel 0" : "");
+    }
+    return its_rate + " with an acceleration of " + std::to_string(accel) +
+           " steps/s^2: the board's step engine cannot plan that ramp: use a longer delay or another acceleration";
+  }
+  return its_rate + "; with the other moving motors (" + others.substr(2) + ") they would make " +
+         std::to_string(sum) + " steps/s or more together, above " + which +
+         ": use a longer delay, or wait for the other motors";
 }
 
 void Session::apply(const BoardFrame& frame) {
@@ -201,7 +263,9 @@ void Session::apply_sent(const Command& command) {
   seed.delay_us = std::max<uint32_t>(move->delay_us, 1);
   if (move->dir == proto::kActionHome) {
     m.state = MotorState::kHoming;
-    seed.end = move->steps > 0 ? now + seed_duration(move->steps, move->delay_us) : now + kSeedHomingTime;
+    // A delay of 0 seeks at home_seek_us, which the seed firmware does not let anyone change.
+    const uint32_t delay = move->delay_us != 0 ? move->delay_us : proto::kSettings[proto::kSettingHomeSeek - 1].initial;
+    seed.end = move->steps > 0 ? now + seed_duration(move->steps, delay) : now + kSeedHomingTime;
     return;
   }
   const int64_t units = static_cast<int64_t>(move->steps) * kUnitsPerStep / m.microstep;

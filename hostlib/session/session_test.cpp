@@ -441,3 +441,29 @@ TEST_CASE("a stream keeps lines in flight, and stops at a refusal with the count
   // Pipelined: with 22-byte lines and a 128-byte window, several lines wait for their answers.
   CHECK(stopped->sent - 31 >= 3);
 }
+
+TEST_CASE("replies to lines nobody waits for any more are never taken for a later line's") {
+  StateDir dir;
+  hmc::SessionOptions options;
+  bool armed = false;
+  int polls = 0;
+  options.interrupted = [&] { return armed && ++polls == 2; };  // with the stream's lines in flight
+  auto s = open("sim://late?fast", options);
+  std::vector<hmc::Command> commands;
+  for (uint32_t i = 0; i < 60; ++i) commands.push_back(hmc::ServoMove{1 + i % 2, 10 + i});
+  armed = true;
+  auto streamed = s->stream(commands);
+  REQUIRE_FALSE(streamed.ok());
+  CHECK(streamed.error().kind == SessionError::Kind::kInterrupted);
+  // The stops' answers, and every one after, are their own lines' (a STA gets a status back).
+  for (uint32_t unit = 1; unit <= 4; ++unit) {
+    auto reply = s->execute(hmc::StatusQuery{unit});
+    REQUIRE(reply.ok());
+    if (unit <= 3) {
+      REQUIRE(std::holds_alternative<hmc::MotorStatus>(*reply));
+      CHECK(std::get<hmc::MotorStatus>(*reply).motor == unit);
+    } else {
+      CHECK(std::holds_alternative<hmc::BoardStatus>(*reply));
+    }
+  }
+}

@@ -68,6 +68,7 @@ struct SessionError {
     kLink,         // the port failed or the connection was lost
     kInterrupted,  // interrupted (Ctrl-C); every motor was sent a stop
     kTooOld,       // the board's firmware predates a feature asked for: reflash
+    kEnded,        // a motion ended early: a switch, the emergency switch, a stop, homing without its switch
   };
   Kind kind = Kind::kLink;
   std::string message;                        // in words, with what to do
@@ -162,8 +163,10 @@ class Session {
   // least every 50 ms): the general wait behind wait_until_idle, with the same interrupt, link
   // and silence handling. `done` may send commands through this session.
   SessionResult<Done> wait(const std::function<bool()>& done, std::optional<Millis> limit = {});
-  // Sends a stop to every motor (and, v2, waits for the replies).
+  // Sends a stop to every motor (and, v2, waits for the replies and until they rest).
   SessionResult<Done> stop_all();
+  // The same for some motors.
+  SessionResult<Done> stop(const std::vector<uint32_t>& motors);
   // Reads and handles what the board sends for `duration`, or until interrupted.
   SessionResult<Done> listen(Millis duration);
 
@@ -173,7 +176,8 @@ class Session {
   // it can never overflow) — the link never waits for a reply. The commands are checked
   // against the protocol's ranges before anything is sent; the board's rules are the board's to
   // apply while streaming. At the first refusal nothing more is sent, the lines already on
-  // their way are answered and counted, and the report says which line was refused and why.
+  // their way are answered and counted, every motor the stream had started is stopped (giving up
+  // never leaves one running), and the report says which lines were refused and why.
   // With the seed firmware, one line at a time, each after the previous one's wire time.
   struct StreamReport {
     size_t sent = 0;       // lines written
@@ -181,6 +185,8 @@ class Session {
     std::optional<size_t> refused;  // index of the first refused command
     std::string why;       // its refusal, explained
     std::vector<size_t> refused_after;  // lines sent after it that the board refused too
+    std::vector<std::string> why_after;  // why, for each of refused_after
+    std::vector<uint32_t> stopped;       // after a refusal: the motors the stream had started
   };
   SessionResult<StreamReport> stream(const std::vector<Command>& commands, bool pipelined = true);
 
@@ -190,10 +196,15 @@ class Session {
   SessionResult<Done> detect_firmware();
   // Sends a line; `command` is what it carries, applied to the model once accepted.
   SessionResult<Done> write_line(const std::string& line, std::optional<Command> command);
-  // The next reply (non-event frame), handling events on the way.
-  SessionResult<BoardFrame> await_reply(std::string_view sent);
+  // The reply to line number `line` (lines_written_ once it was sent), handling events on the
+  // way; replies to earlier lines nobody waits for any more (an interrupted stream's, a late one)
+  // are passed over, never taken for its answer.
+  SessionResult<BoardFrame> await_reply(std::string_view sent, uint64_t line);
   // Reads for at most `timeout`; returns frames decoded in that time (events handled).
   SessionResult<std::vector<BoardFrame>> pump(Millis timeout);
+  // A rate_limit refusal of `move` in words, with the limit it broke and the numbers (the
+  // board's settings and the other motors' rates, asked with GET and STA).
+  std::string explain_rate_limit(const StepperMove& move);
   void apply(const BoardFrame& frame);
   void apply_sent(const Command& command);
   void settle_seed_motions();
@@ -224,10 +235,16 @@ class Session {
   struct InFlight {
     std::optional<Command> command;  // what the line carries, when it decoded
     size_t bytes = 0;                // its length on the wire, line end included
+    uint64_t line = 0;               // its number: the replies come in the lines' order
   };
   std::deque<InFlight> in_flight_;  // lines sent, oldest first, awaiting replies
   size_t in_flight_bytes_ = 0;
-  std::vector<BoardFrame> pending_replies_;       // replies read, not yet taken
+  uint64_t lines_written_ = 0;      // lines that get a reply, sent so far
+  struct Reply {
+    uint64_t line = 0;  // the line it answers; 0: none was in flight (it belongs to nobody)
+    BoardFrame frame;
+  };
+  std::deque<Reply> pending_replies_;  // replies read, not yet taken
   bool rebooted_ = false;                     // EVB seen since the last wait began
   bool detecting_ = false;                    // open(): the board's checksum mode is not known yet
   // The keep-alive thread shares the transport: every read and write holds this.
@@ -243,6 +260,10 @@ class Session {
 // The board's refusal in words, with what to do: "motor 1's switch at the forward end is pressed:
 // move it the other way (or home it)".
 std::string explain_refusal(proto::Reason reason, const Command* command, const BoardModel& model);
+
+// Why a homing that ended without its switch did: "the emergency switch stopped it" or "the
+// switch was not found".
+std::string not_homed_cause(const BoardModel& model);
 
 // A motor's position in full steps, for people: 819200 (1/256 step) -> "3200", 64 -> "0.25".
 std::string steps_text(int64_t position);
