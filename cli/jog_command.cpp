@@ -6,11 +6,9 @@
 #include <termios.h>
 #include <unistd.h>
 
-#include <array>
-#include <cctype>
-#include <cstdlib>
+#include <algorithm>
 #include <cerrno>
-#include <cmath>
+#include <cstdlib>
 #include <iostream>
 #include <optional>
 #include <sstream>
@@ -19,75 +17,12 @@
 
 #include "axis_units.h"
 #include "exit_codes.h"
+#include "hmc/jog.h"
 #include "hmc/units.h"
 #include "profile_choice.h"
 
 namespace hmc::cli {
 namespace {
-
-// What one key asks for.
-struct JogKey {
-  enum class Kind { kMove, kStepUp, kStepDown, kStopAll, kZero, kQuit, kInterrupt };
-  Kind kind = Kind::kQuit;
-  size_t axis = 0;  // kMove: 0 first axis (Left/Right), 1 second (Up/Down), 2 third (Page Up/Down)
-  int dir = 1;      // kMove: +1 or -1
-  bool fast = false;  // kMove: Shift held, 10x the step
-};
-
-// The keys in `bytes`, in order; bytes of a sequence not complete yet stay in `bytes` for the
-// next read, unknown keys and sequences are dropped. Arrows come as ESC [ A (or ESC O A in the
-// terminal's application mode), Shift+arrow as ESC [ 1 ; 2 A, Page Up/Down as ESC [ 5 ~ / 6 ~.
-std::vector<JogKey> decode_keys(std::string& bytes) {
-  std::vector<JogKey> keys;
-  size_t i = 0;
-  const auto move = [&keys](size_t axis, int dir, bool fast) { keys.push_back({JogKey::Kind::kMove, axis, dir, fast}); };
-  while (i < bytes.size()) {
-    const char c = bytes[i];
-    if (c != '\x1b') {
-      ++i;
-      switch (c) {
-        case '+': case '=': keys.push_back({JogKey::Kind::kStepUp}); break;
-        case '-': case '_': keys.push_back({JogKey::Kind::kStepDown}); break;
-        case ' ': keys.push_back({JogKey::Kind::kStopAll}); break;
-        case 'z': case 'Z': keys.push_back({JogKey::Kind::kZero}); break;
-        case 'q': case 'Q': keys.push_back({JogKey::Kind::kQuit}); break;
-        case '\x03': keys.push_back({JogKey::Kind::kInterrupt}); break;
-        default: break;
-      }
-      continue;
-    }
-    // ESC: a control sequence's introducer, then parameters (digits and ';'), then its final byte.
-    if (i + 1 >= bytes.size()) break;
-    if (bytes[i + 1] != '[' && bytes[i + 1] != 'O') {
-      ++i;  // a lone Escape key
-      continue;
-    }
-    size_t end = i + 2;
-    while (end < bytes.size() && (std::isdigit(static_cast<unsigned char>(bytes[end])) || bytes[end] == ';')) ++end;
-    if (end >= bytes.size()) break;
-    const std::string params = bytes.substr(i + 2, end - (i + 2));
-    const char final_byte = bytes[end];
-    i = end + 1;
-    // A modifier parameter ("1;2"): 2 is Shift (any modifier with Shift: 2, 4, 6, 8).
-    const size_t semicolon = params.find(';');
-    const int modifier = semicolon == std::string::npos ? 1 : std::atoi(params.c_str() + semicolon + 1);
-    const bool shift = modifier >= 2 && ((modifier - 1) & 1) != 0;
-    const std::string first = params.substr(0, semicolon);
-    switch (final_byte) {
-      case 'C': move(0, +1, shift); break;
-      case 'D': move(0, -1, shift); break;
-      case 'A': move(1, +1, shift); break;
-      case 'B': move(1, -1, shift); break;
-      case '~':
-        if (first == "5") move(2, +1, shift);
-        if (first == "6") move(2, -1, shift);
-        break;
-      default: break;
-    }
-  }
-  bytes.erase(0, i);
-  return keys;
-}
 
 // The terminal in raw mode for as long as this lives; restore() (or the end of its life) puts
 // back the modes it found, whichever way the command ends.
@@ -120,11 +55,6 @@ class RawTerminal {
   bool active_ = false;
 };
 
-// Step sizes: a profile axis in its units (0.1, 1, 10 mm or deg), a bare motor in steps.
-constexpr std::array<double, 3> kProfileSteps{0.1, 1, 10};
-constexpr std::array<double, 3> kMotorSteps{1, 10, 100};
-constexpr double kShiftFactor = 10;
-
 struct JogAxis {
   Axis axis;
   bool from_profile = false;
@@ -144,7 +74,7 @@ class Jogger {
   // Carries out one key; a session error (the link lost, a refusal it cannot explain) ends the jog.
   SessionResult<Done> apply(const JogKey& key) {
     switch (key.kind) {
-      case JogKey::Kind::kStepUp: level_ = std::min<size_t>(level_ + 1, kProfileSteps.size() - 1); return Done{};
+      case JogKey::Kind::kStepUp: level_ = std::min<size_t>(level_ + 1, kJogProfileSteps.size() - 1); return Done{};
       case JogKey::Kind::kStepDown: level_ = level_ == 0 ? 0 : level_ - 1; return Done{};
       case JogKey::Kind::kStopAll:
         for (JogAxis& a : axes_) a.target.reset();
@@ -176,12 +106,12 @@ class Jogger {
 
  private:
   double step_units(const JogAxis& a) const {
-    if (a.from_profile) return kProfileSteps[level_];
-    return kMotorSteps[level_] / a.axis.steps_per_unit();
+    if (a.from_profile) return kJogProfileSteps[level_];
+    return kJogMotorSteps[level_] / a.axis.steps_per_unit();
   }
   std::string step_words(const JogAxis& a) const {
-    if (a.from_profile) return number_text(kProfileSteps[level_]) + " " + std::string(unit_name(a.axis.unit()));
-    return number_text(kMotorSteps[level_]) + " steps";
+    if (a.from_profile) return number_text(kJogProfileSteps[level_]) + " " + std::string(unit_name(a.axis.unit()));
+    return number_text(kJogMotorSteps[level_]) + " steps";
   }
 
   SessionResult<Done> move(const JogKey& key) {
@@ -190,12 +120,10 @@ class Jogger {
     const MotorStatus& motor = s_.model().motor(a.axis.motor);
     const bool moving = motor.state != MotorState::kIdle;
     const double here = a.axis.from_board_position(motor.position);
-    double target = (moving && a.target ? *a.target : here) + key.dir * step_units(a) * (key.fast ? kShiftFactor : 1);
-    message_.clear();
-    if (beyond_soft_limits(a.axis, motor, target)) {
-      target = a.axis.limit_max && target > *a.axis.limit_max ? *a.axis.limit_max : *a.axis.limit_min;
-      message_ = a.axis.name + " stops at its soft limit " + number_text(target) + " " + std::string(unit_name(a.axis.unit()));
-    }
+    const JogEnd end = jog_end(a.axis, motor, moving && a.target ? *a.target : here,
+                               key.dir * step_units(a) * (key.fast ? kJogShiftFactor : 1));
+    const double target = end.target;
+    message_ = end.at_limit ? a.axis.name + " stops at its soft limit " + number_text(target) + " " + unit_name(a.axis.unit()) : "";
     if (moving) {
       if (SessionResult<Done> stopped = s_.stop({a.axis.motor}); !stopped) return stopped;
     }
@@ -246,7 +174,7 @@ class Jogger {
 
   Session& s_;
   std::vector<JogAxis> axes_;
-  size_t level_ = 1;
+  size_t level_ = kJogFirstStep;
   size_t last_ = 0;
   std::string message_;
 };
@@ -274,7 +202,7 @@ int jog_loop(const GlobalOptions& g, Session& s, const Profile* profile) {
       const ssize_t got = read(STDIN_FILENO, buffer, sizeof buffer);
       if (got <= 0 && (in.revents & (POLLHUP | POLLERR)) != 0) return kExitOk;  // the terminal went away
       if (got > 0) pending.append(buffer, static_cast<size_t>(got));
-      for (const JogKey& key : decode_keys(pending)) {
+      for (const JogKey& key : decode_jog_keys(pending)) {
         if (key.kind == JogKey::Kind::kQuit) return kExitOk;
         if (key.kind == JogKey::Kind::kInterrupt) return kExitInterrupted;
         if (SessionResult<Done> done = jogger.apply(key); !done) {
