@@ -254,9 +254,17 @@ void add_jog_command(CLI::App& app, const GlobalOptions& g, int& exit_code) {
       terminal.restore();
     }
     std::cout << '\n';
-    // Every motor stopped, whichever way the jog ended (a lost link: the board's watchdog brakes them).
-    if (SessionResult<Done> stopped = s->stop_all(); !stopped && code == kExitOk) code = report_error(g, stopped.error());
-    if (!g.json) std::cerr << (code == kExitInterrupted ? "interrupted; " : "") << "every motor was sent a stop\n";
+    // Every motor stopped, whichever way the jog ended; over a lost link only the board's watchdog can.
+    if (SessionResult<Done> stopped = s->stop_all(); !stopped) {
+      if (code == kExitOk) {
+        code = report_error(g, stopped.error());
+      } else if (!g.json) {
+        std::cerr << "the stop could not be sent (" << stopped.error().message << ")"
+                  << (s->watchdog_armed() ? "; the board's link watchdog stops the motors" : "") << '\n';
+      }
+    } else if (!g.json) {
+      std::cerr << (code == kExitInterrupted ? "interrupted; " : "") << "every motor was sent a stop\n";
+    }
     exit_code = code;
   });
 }

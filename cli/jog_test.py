@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """`hmc jog` through a pseudo-terminal against hmc-sim over TCP (with its trace): keys in, the
 board's frames out (STM lines and their step counts), a soft limit respected, z zeroing (POS),
-the terminal's modes put back after q and after SIGTERM, every motor stopped on exit, and a
+the terminal's modes put back after q, SIGTERM, Ctrl-C (a byte in raw mode) and a lost link,
+every motor stopped on exit (and no stop claimed when the link is gone), the watchdog armed, and a
 refusal when standard input is not a terminal.
 
 Usage: jog_test.py HMC HMC_SIM
@@ -171,8 +172,42 @@ p = next((m for m in motors if m.get("motor") == 1), {})
 check(bool(p) and -400 < p.get("steps", -400) < 400, "slide stopped partway between 5 mm and -5 mm: %s steps" % p.get("steps"))
 j.close()
 
-board.send_signal(signal.SIGTERM)
+check(any(l[0] != "0" for l in rx_lines("WDG")), "the jog armed the link watchdog: %s" % rx_lines("WDG")[:1])
+
+# Ctrl-C arrives as a byte in raw mode: exit 130, the terminal put back, the motors stopped.
+j = Jog()
+check(j.wait_for(r"slide"), "a third jog starts")
+before = len(rx_lines("STM"))
+j.keys("\x03")
+try:
+    code = j.proc.wait(timeout=5)
+except subprocess.TimeoutExpired:
+    j.proc.kill()
+    code = None
+check(code == 130, "Ctrl-C: exit 130 (%s)" % code)
+check(j.restored(), "after Ctrl-C the terminal's modes are the ones it had")
+check(sum(1 for l in rx_lines("STM")[before:] if l[1] == "0") == 3, "Ctrl-C: a stop for each motor")
+j.close()
+
+# The link lost mid-jog (the board gone): an error, the terminal put back.
+j = Jog()
+check(j.wait_for(r"slide"), "a fourth jog starts")
+j.keys("\x1b[1;2D")
+time.sleep(0.3)
+board.kill()
 board.wait(timeout=5)
+try:
+    code = j.proc.wait(timeout=10)
+except subprocess.TimeoutExpired:
+    j.proc.kill()
+    code = None
+j.err.seek(0)
+said = j.err.read()
+check(code in (3, 4), "the link lost: exit 3 or 4 (%s) %r" % (code, said.strip()[-160:]))
+check("every motor was sent a stop" not in said and "link watchdog stops the motors" in said,
+      "the link lost: no stop claimed, the watchdog named")
+check(j.restored(), "after the link is lost the terminal's modes are the ones it had")
+j.close()
 elapsed = time.time() - start
 if failures:
     print("jog_test: %d failures (%.1f s)" % (failures, elapsed))
