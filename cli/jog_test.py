@@ -7,10 +7,11 @@ refusal when standard input is not a terminal.
 
 Usage: jog_test.py HMC HMC_SIM
 """
-import json, os, re, select, signal, subprocess, sys, tempfile, termios, time
+import atexit, json, os, re, select, shutil, signal, subprocess, sys, tempfile, termios, time
 
 hmc, sim = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
 work = tempfile.mkdtemp(prefix="hmc-jog-")
+atexit.register(shutil.rmtree, work, True)
 trace = os.path.join(work, "trace.jsonl")
 failures = 0
 env = dict(os.environ, HMC_SIM_STATE=os.path.join(work, "state"), XDG_CONFIG_HOME=work)
@@ -42,6 +43,7 @@ check(r.returncode == 2 and "not" in r.stderr and "terminal" in r.stderr,
 serr = open(os.path.join(work, "sim.err"), "w+")
 board = subprocess.Popen([sim, "--tcp", "127.0.0.1:0", "--no-self-test", "--trace", trace],
                          stderr=serr, stdout=subprocess.DEVNULL)
+atexit.register(lambda: board.poll() is None and board.kill())
 port = None
 for _ in range(200):
     serr.seek(0)
