@@ -190,7 +190,7 @@ int jog_loop(const GlobalOptions& g, Session& s, const Profile* profile) {
     shown = line;
     std::cout << "\r\x1b[K" << line << std::flush;
   };
-  std::cout << "hmc jog: arrows, Page Up/Down (Shift: 10x), +/- step, space stop, z zero, q quit\r\n";
+  std::cout << "hmc jog: arrows, Page Up/Down (Shift: 10x), +/- step, space stop, z zero, q quit\n";
   draw();
   while (true) {
     if (interrupt_requested()) return kExitInterrupted;
