@@ -12,6 +12,7 @@
 #include "flash_command.h"
 #include "frame_command.h"
 #include "grbl_command.h"
+#include "jog_command.h"
 #include "motion_commands.h"
 #include "ports_command.h"
 #include "sim_command.h"
@@ -54,6 +55,7 @@ int main(int argc, char** argv) {
   hmc::cli::add_config_command(app, global, exit_code);
   hmc::cli::add_zero_command(app, global, exit_code);
   hmc::cli::add_grbl_command(app, global, exit_code);
+  hmc::cli::add_jog_command(app, global, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
