@@ -53,6 +53,21 @@ expect() {
   fi
 }
 
+# require_built FILE...: the firmware preset's files the test runs on. Without one the test is
+# skipped (exit 77), unless CI=true: there it must have been built, and its absence fails.
+require_built() {
+  local file
+  for file in "$@"; do
+    [[ -f $file ]] && continue
+    if [[ ${CI:-} == true ]]; then
+      echo "FAIL: no $file (build the firmware preset first)"
+      exit 1
+    fi
+    echo "SKIP: no $file (cmake --preset firmware && cmake --build --preset firmware)"
+    exit 77
+  done
+}
+
 # --- hmc-sim processes of the test's own (several at once, each its own stderr) ---------------
 
 # ms: the wall clock in milliseconds.
