@@ -4,15 +4,9 @@
 # exit codes and, through hmc-sim's trace, what reached the board.
 # Usage: board_test.sh HMC_BINARY HMC_SIM_BINARY SOURCE_DIR
 set -uo pipefail
-if [[ $# -ne 3 || ! -x $1 || ! -x $2 || ! -d $3 ]]; then
-  echo "usage: $0 HMC_BINARY HMC_SIM_BINARY SOURCE_DIR" >&2
-  exit 2
-fi
-hmc=$(realpath "$1")
-sim=$(realpath "$2")
-src=$3
 # shellcheck source=sim_test_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/sim_test_lib.sh"
+hmc_sim_src_args "$@"
 
 # check_true NAME DETAIL COMMAND...: COMMAND succeeds (DETAIL is shown when it does not).
 check_true() {

@@ -1,6 +1,8 @@
+# shellcheck shell=bash
 # Shared by the shell tests of hmc and hmc-sim (sourced, not run): a work directory (the current
 # one) removed on exit with every process in $pids and $sim_pid, failure counting, the checks,
 # and starting/stopping one hmc-sim over TCP (those need $sim, the hmc-sim binary).
+started_in=$PWD
 work=$(mktemp -d)
 cd "$work" || exit 1
 export HMC_SIM_STATE=$work/state
@@ -51,6 +53,21 @@ expect() {
   if [[ $code -ne $want_exit ]] || ! grep -Eq -- "$pattern" <<<"$out"; then
     fail "$(printf '%s: exit %s (want %s), output:\n%s' "$name" "$code" "$want_exit" "$out")"
   fi
+}
+
+# hmc_sim_src_args "$@": a test run as TEST HMC_BINARY HMC_SIM_BINARY SOURCE_DIR checks those
+# (usage and exit 2 otherwise) and gets them as $hmc, $sim and $src, absolute.
+# shellcheck disable=SC2034  # $hmc and $src are the sourcing test's
+hmc_sim_src_args() {
+  cd "$started_in" || exit 1
+  if [[ $# -ne 3 || ! -x $1 || ! -x $2 || ! -d $3 ]]; then
+    echo "usage: $0 HMC_BINARY HMC_SIM_BINARY SOURCE_DIR" >&2
+    exit 2
+  fi
+  hmc=$(realpath "$1")
+  sim=$(realpath "$2")
+  src=$(realpath "$3")
+  cd "$work" || exit 1
 }
 
 # require_built FILE...: the firmware preset's files the test runs on. Without one the test is
