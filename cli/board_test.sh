@@ -4,49 +4,9 @@
 # exit codes and, through hmc-sim's trace, what reached the board.
 # Usage: board_test.sh HMC_BINARY HMC_SIM_BINARY SOURCE_DIR
 set -uo pipefail
-if [[ $# -ne 3 || ! -x $1 || ! -x $2 || ! -d $3 ]]; then
-  echo "usage: $0 HMC_BINARY HMC_SIM_BINARY SOURCE_DIR" >&2
-  exit 2
-fi
-hmc=$(realpath "$1")
-sim=$(realpath "$2")
-src=$3
-work=$(mktemp -d)
-cd "$work" || exit 1  # anything a command leaves in its working directory goes with the rest
-export HMC_SIM_STATE=$work/state  # sim:// journals: never the user's
-unset HMC_PORT
-pids=()
-failures=0
-checks=0
-
-# Stops what is still running (and what it started: `hmc sim` runs hmc-sim as its child).
-cleanup() {
-  local pid child
-  for pid in "${pids[@]}"; do
-    for child in $(pgrep -P "$pid" 2>/dev/null); do kill -9 "$child" 2>/dev/null; done
-    kill -9 "$pid" 2>/dev/null
-  done
-  wait 2>/dev/null
-  rm -rf "$work"
-}
-trap cleanup EXIT
-
-fail() {
-  failures=$((failures + 1))
-  printf 'FAIL %s\n' "$*"
-}
-
-# check NAME WANT GOT: GOT equals WANT.
-check() {
-  checks=$((checks + 1))
-  [[ $2 == "$3" ]] || fail "$(printf '%s:\n  want: %s\n  got:  %s' "$1" "$2" "$3")"
-}
-
-# check_match NAME PATTERN TEXT: TEXT matches the extended regex PATTERN.
-check_match() {
-  checks=$((checks + 1))
-  grep -Eq -- "$2" <<<"$3" || fail "$(printf '%s: no match for %s in:\n%s' "$1" "$2" "$3")"
-}
+# shellcheck source=sim_test_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/sim_test_lib.sh"
+hmc_sim_src_args "$@"
 
 # check_true NAME DETAIL COMMAND...: COMMAND succeeds (DETAIL is shown when it does not).
 check_true() {
@@ -57,7 +17,8 @@ check_true() {
 }
 
 # expect NAME WANT_EXIT PATTERN -- COMMAND...: the command exits WANT_EXIT (within 30 s) and its
-# combined output matches the extended regex PATTERN. Sets $out (stdout only) for further checks.
+# combined output matches the extended regex PATTERN. Sets $out (stdout only) for further checks
+# (in place of sim_test_lib.sh's expect, which sets nothing).
 expect() {
   local name=$1 want_exit=$2 pattern=$3 code
   shift 4
@@ -91,59 +52,6 @@ for x in sys.argv[2:]:
         print(json.dumps(eval(x)))
     except Exception as e:
         print("(%s: %r, in %s)" % (x, e, sys.argv[1].replace("\n", " ")))' "$text" "$@")
-}
-
-ms() { echo $(($(date +%s%N) / 1000000)); }
-
-# start NAME ARGS...: runs hmc-sim in the background, stderr to $work/NAME.err; sets $pid.
-start() {
-  local name=$1
-  shift
-  "$sim" "$@" 2>"$work/$name.err" &
-  pid=$!
-  pids+=("$pid")
-}
-
-# announced NAME SED_EXPRESSION: waits (10 s at most, while the process $pid runs) for a line on
-# NAME's stderr and prints what the expression extracts from it.
-announced() {
-  local found
-  for _ in $(seq 200); do
-    found=$(sed -n "$2" "$work/$1.err" 2>/dev/null)
-    if [[ -n $found ]]; then
-      echo "$found"
-      return 0
-    fi
-    kill -0 "$pid" 2>/dev/null || break
-    sleep 0.05
-  done
-  echo "($1 said where it listens nowhere on its standard error: $(cat "$work/$1.err" 2>/dev/null))" >&2
-  return 1
-}
-tcp_port() { announced "$1" 's/^hmc-sim: listening on tcp:\/\/127\.0\.0\.1:\([0-9]*\)$/\1/p'; }
-control_port() { announced "$1" 's/^hmc-sim: control listening on tcp:\/\/127\.0\.0\.1:\([0-9]*\)$/\1/p'; }
-
-# finish PID SECONDS: waits at most SECONDS for PID to end and sets $finished to its exit code
-# (124, after killing it, when it did not end in time).
-finish() {
-  local deadline=$(($(ms) + $2 * 1000))
-  while kill -0 "$1" 2>/dev/null && (($(ms) < deadline)); do sleep 0.02; done
-  if kill -0 "$1" 2>/dev/null; then
-    kill -9 "$1" 2>/dev/null
-    wait "$1" 2>/dev/null
-    finished=124
-    return
-  fi
-  wait "$1" 2>/dev/null
-  finished=$?
-}
-
-# stopped NAME SIGNAL: stops the hmc-sim NAME ($pid) with SIGNAL and checks it exits 0 (which
-# also writes out its trace).
-stopped() {
-  kill "-$2" "$pid" 2>/dev/null
-  finish "$pid" 10
-  check "$1: hmc-sim's exit code after SIG$2" 0 "$finished"
 }
 
 # control PORT COMMAND: sends one command on hmc-sim's control channel, prints the answer line.
@@ -262,7 +170,7 @@ motor 3: stopped' -- "$hmc" -p "$board" stop
   pids+=("$mpid")
   for _ in $(seq 200); do grep -q '^listening' "$work/monitor.err" && break; sleep 0.05; done
   check "control: press 2 1" ok "$(control "$cport" 'press 2 1')"
-  finish "$mpid" 15
+  await_exit "$mpid" 15
   check "monitor exit code" 0 "$finished"
   check_match "monitor shows the switch" '^\+[0-9]+\.[0-9]{3} s  EVL event: motor 2 .*pressed' "$(cat "$work/monitor.out")"
   check "control: release 2 1" ok "$(control "$cport" 'release 2 1')"
@@ -294,7 +202,7 @@ if dev=$(announced pty 's/^hmc-sim: pty \(\/dev\/.*\)$/\1/p'); then
   pids+=("$mpid")
   for _ in $(seq 200); do grep -q '^listening' "$work/pty-monitor.err" && break; sleep 0.05; done
   expect pty-busy 3 "$dev.*in use|in use.*$dev" -- "$hmc" -p "$dev" status
-  finish "$mpid" 15
+  await_exit "$mpid" 15
   check "pty: the monitor holding the port exits 0" 0 "$finished"
   expect pty-free-again 0 '^2 +idle +400 ' -- "$hmc" -p "$dev" status
 else
@@ -378,7 +286,7 @@ if port=$(tcp_port gone) && cport=$(control_port gone); then
   kill -9 "$pid" 2>/dev/null
   wait "$pid" 2>/dev/null
   t0=$(ms)
-  finish "$hpid" 10
+  await_exit "$hpid" 10
   took=$(($(ms) - t0))
   check "disconnect: exit code" 3 "$finished"
   check_true "disconnect: hmc ended ${took} ms after the board went" "want at most 2000 ms" test "$took" -le 2000
@@ -397,7 +305,7 @@ if port=$(tcp_port ctrlc) && cport=$(control_port ctrlc); then
   check_true "ctrl-c: motor 3 moves" "the board never said so" moving "$cport" 3 "$hpid"
   sleep 0.3
   kill -INT "$hpid" 2>/dev/null
-  finish "$hpid" 10
+  await_exit "$hpid" 10
   check "ctrl-c: exit code" 130 "$finished"
   check_match "ctrl-c: says every motor was sent a stop" 'every motor was sent a stop' "$(cat "$work/ctrlc.out")"
   check_match "ctrl-c: says where motor 3 stopped" '^motor 3 stopped at [0-9]+ steps of 1/16' "$(cat "$work/ctrlc.out")"
@@ -447,7 +355,7 @@ else
 fi
 # `hmc sim` ends when its hmc-sim does (Ctrl-C reaches both; here hmc-sim alone is told).
 for child in $(pgrep -P "$hpid"); do kill -TERM "$child"; done
-finish "$hpid" 10
+await_exit "$hpid" 10
 check "hmc sim: exit code once hmc-sim ended" 0 "$finished"
 
 t_total=$(($(ms) - t_begin))

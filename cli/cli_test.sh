@@ -2,25 +2,10 @@
 # Runs the real `hmc` binary as a user would and checks its output and exit codes.
 # Usage: cli_test.sh HMC_BINARY SOURCE_DIR
 set -uo pipefail
-hmc=$1
-src=$2
-failures=0
-checks=0
-
-# expect NAME WANT_EXIT PATTERN -- COMMAND...: the command exits WANT_EXIT and its combined
-# output matches the extended regex PATTERN.
-expect() {
-  local name=$1 want_exit=$2 pattern=$3
-  shift 4
-  local out code
-  out=$("$@" 2>&1)
-  code=$?
-  checks=$((checks + 1))
-  if [[ $code -ne $want_exit ]] || ! grep -Eq -- "$pattern" <<<"$out"; then
-    failures=$((failures + 1))
-    printf 'FAIL %s: exit %s (want %s), output:\n%s\n' "$name" "$code" "$want_exit" "$out"
-  fi
-}
+hmc=$(realpath "$1")
+src=$(realpath "$2")
+# shellcheck source=sim_test_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/sim_test_lib.sh"
 
 expect encode-words 0 '^STX#6#STM#1#1#128#1000#500#94#ETX$' -- "$hmc" frame encode STM 1 1 128 1000 500
 expect encode-notation 0 '^STX#3#SVM#1#135#136#ETX$' -- "$hmc" frame encode '[#SVM#1#135]'
@@ -29,9 +14,7 @@ expect encode-bad-microstep 1 'microstep is 3: expected a power of two 1-256' --
 expect encode-home-motor-3 1 'no_switch' -- "$hmc" frame encode STM 3 3 0 0 0
 expect encode-too-few 1 'SVM takes 2 values \(SVM <servo> <angle>\), got 1' -- "$hmc" frame encode SVM 1
 expect encode-warns 0 'warning: delay_us 20 is outside' -- "$hmc" frame encode STM 3 1 8 0 20
-out=$("$hmc" frame encode STM 3 1 8 0 20 2>/dev/null)
-checks=$((checks + 1))
-[[ $out == 'STX#6#STM#3#1#8#0#20#32#ETX' ]] || { failures=$((failures + 1)); echo "FAIL encode-stdout-clean: $out"; }
+check encode-stdout-clean 'STX#6#STM#3#1#8#0#20#32#ETX' "$("$hmc" frame encode STM 3 1 8 0 20 2>/dev/null)"
 expect encode-json 0 '"frame":"STX#3#SVM#2#90#92#ETX"' -- "$hmc" frame encode SVM 2 90 --json
 
 expect encode-ver 0 '^STX#1#VER#0#ETX$' -- "$hmc" frame encode VER

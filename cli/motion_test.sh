@@ -5,15 +5,9 @@
 # resumed with --from to the end of the file.
 # Usage: motion_test.sh HMC_BINARY HMC_SIM_BINARY SOURCE_DIR
 set -uo pipefail
-if [[ $# -ne 3 || ! -x $1 || ! -x $2 || ! -d $3 ]]; then
-  echo "usage: $0 HMC_BINARY HMC_SIM_BINARY SOURCE_DIR" >&2
-  exit 2
-fi
-hmc=$(realpath "$1")
-sim=$(realpath "$2")
-src=$(realpath "$3")
 # shellcheck source=sim_test_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/sim_test_lib.sh"
+hmc_sim_src_args "$@"
 
 # --- check, plan, dry run ---------------------------------------------------------------------
 for f in "$src"/examples/*.json; do

@@ -10,28 +10,10 @@ if [[ $# -ne 2 || ! -x $1 || ! -d $2 ]]; then
 fi
 hmc=$(realpath "$1")
 src=$(realpath "$2")
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work" || exit 1
-export HMC_SIM_STATE=$work/state XDG_CONFIG_HOME=$work/config
-unset HMC_PORT HMC_PROFILE
-failures=0
-checks=0
-
-# expect NAME WANT_EXIT PATTERN -- COMMAND...: the command exits WANT_EXIT and its combined
-# output matches the extended regex PATTERN.
-expect() {
-  local name=$1 want_exit=$2 pattern=$3
-  shift 4
-  local out code
-  out=$("$@" 2>&1)
-  code=$?
-  checks=$((checks + 1))
-  if [[ $code -ne $want_exit ]] || ! grep -Eq -- "$pattern" <<<"$out"; then
-    failures=$((failures + 1))
-    printf 'FAIL %s: exit %s (want %s), output:\n%s\n' "$name" "$code" "$want_exit" "$out"
-  fi
-}
+# shellcheck source=sim_test_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/sim_test_lib.sh"
+export XDG_CONFIG_HOME=$work/config
+unset HMC_PROFILE
 
 # --- hmc config ---------------------------------------------------------------------------------
 expect path-default 0 "^$work/config/hmc/config.toml$" -- "$hmc" config path

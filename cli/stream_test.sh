@@ -5,15 +5,9 @@
 # before the refused line was carried out.
 # Usage: stream_test.sh HMC_BINARY HMC_SIM_BINARY SOURCE_DIR
 set -uo pipefail
-if [[ $# -ne 3 || ! -x $1 || ! -x $2 || ! -d $3 ]]; then
-  echo "usage: $0 HMC_BINARY HMC_SIM_BINARY SOURCE_DIR" >&2
-  exit 2
-fi
-hmc=$(realpath "$1")
-sim=$(realpath "$2")
-src=$(realpath "$3")
 # shellcheck source=sim_test_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/sim_test_lib.sh"
+hmc_sim_src_args "$@"
 
 start_sim --baud 115200
 

@@ -8,14 +8,9 @@
 #  - SIGHUP (a closed terminal) stops every motor as SIGTERM does (exit 130).
 # Usage: watchdog_test.sh HMC_BINARY HMC_SIM_BINARY SOURCE_DIR
 set -uo pipefail
-if [[ $# -ne 3 || ! -x $1 || ! -x $2 || ! -d $3 ]]; then
-  echo "usage: $0 HMC_BINARY HMC_SIM_BINARY SOURCE_DIR" >&2
-  exit 2
-fi
-hmc=$(realpath "$1")
-sim=$(realpath "$2")
 # shellcheck source=sim_test_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/sim_test_lib.sh"
+hmc_sim_src_args "$@"
 
 watchdog_ms=300
 ticks_per_ms=48000  # the simulated board's clock, 48 MHz

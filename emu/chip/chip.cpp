@@ -3,10 +3,10 @@
 // the interrupt line numbers (11.2.2, Table 11-3), and virtual time.
 #include "chip.h"
 
-#include <cstdio>
 
 #include "../board/board.h"
 #include "dmac.h"
+#include "hex.h"
 #include "nvmctrl.h"
 #include "port.h"
 #include "scs.h"
@@ -16,12 +16,6 @@
 
 namespace hmc::emu {
 namespace {
-
-std::string hex(uint32_t v) {
-  char text[16];
-  std::snprintf(text, sizeof text, "0x%08X", v);
-  return text;
-}
 
 // The regions the bus dispatches, in 1 KB pages.
 struct Region {
@@ -116,7 +110,7 @@ const Chip::Slot* Chip::slot_for(uint32_t address) const {
 }
 
 void Chip::dispatch_error(uint32_t address, unsigned size, bool write) {
-  violation(std::string(write ? "write to " : "read of ") + hex(address) + " (" +
+  violation(std::string(write ? "write to " : "read of ") + hex32(address) + " (" +
             std::to_string(size) + " bytes): no modelled block there");
 }
 
@@ -128,11 +122,11 @@ uint32_t Chip::bus_read(uint32_t address, unsigned size) {
   }
   if (address % size != 0) {
     violation("unaligned " + std::to_string(size) + "-byte read of " + slot->name + " at " +
-              hex(address) + " (ARMv6-M A3.2: unaligned accesses fault)");
+              hex32(address) + " (ARMv6-M A3.2: unaligned accesses fault)");
     return 0;
   }
   if (slot->mask_register >= 0 && !pm_->clocked(slot->mask_register, slot->mask_bit)) {
-    violation("read of " + slot->name + " at " + hex(address) +
+    violation("read of " + slot->name + " at " + hex32(address) +
               " while its bus clock is masked in PM (datasheet 16.6.2.6)");
     return 0;
   }
@@ -147,11 +141,11 @@ void Chip::bus_write(uint32_t address, uint32_t value, unsigned size) {
   }
   if (address % size != 0) {
     violation("unaligned " + std::to_string(size) + "-byte write of " + slot->name + " at " +
-              hex(address) + " (ARMv6-M A3.2: unaligned accesses fault)");
+              hex32(address) + " (ARMv6-M A3.2: unaligned accesses fault)");
     return;
   }
   if (slot->mask_register >= 0 && !pm_->clocked(slot->mask_register, slot->mask_bit)) {
-    violation("write to " + slot->name + " at " + hex(address) +
+    violation("write to " + slot->name + " at " + hex32(address) +
               " while its bus clock is masked in PM (datasheet 16.6.2.6)");
     return;
   }

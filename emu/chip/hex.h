@@ -1,5 +1,5 @@
 // "0x0000ABCD": how the emulator's messages write an address or a register value. Included by
-// .cpp files only (some keep a local helper of the same name).
+// .cpp files only.
 #pragma once
 
 #include <cstdint>

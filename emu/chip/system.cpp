@@ -1,20 +1,10 @@
 // PM, SYSCTRL, GCLK and WDT (system.h).
 #include "system.h"
 
-#include <cstdio>
-
+#include "hex.h"
 #include "reset_values.h"
 
 namespace hmc::emu {
-namespace {
-
-std::string hex(uint32_t v) {
-  char text[16];
-  std::snprintf(text, sizeof text, "0x%08X", v);
-  return text;
-}
-
-}  // namespace
 
 // ---- PM -------------------------------------------------------------------------------------
 
@@ -282,7 +272,7 @@ void Wdt::write(uint32_t offset, uint32_t value, unsigned size) {
     const uint32_t key = (value >> (8 * (0x08 - offset))) & 0xFF;
     // 18.6.2.2: writing any value other than 0xA5 to CLEAR resets the system immediately.
     if (key != 0xA5) {
-      chip_.violation("WDT CLEAR written with " + hex(key) + " instead of 0xA5: system reset");
+      chip_.violation("WDT CLEAR written with " + hex32(key) + " instead of 0xA5: system reset");
       return;
     }
     cleared_at_ = chip_.now_ps();

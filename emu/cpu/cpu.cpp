@@ -3,9 +3,9 @@
 // B1.5.8 (EXC_RETURN: 0xFFFFFFF1 handler mode, 0xFFFFFFF9 thread mode on the main stack).
 #include "cpu.h"
 
-#include <cstdio>
 #include <cstring>
 
+#include "../chip/hex.h"
 #include "../chip/nvmctrl.h"
 #include "../chip/scs.h"
 #include "cycles.h"
@@ -26,12 +26,6 @@ constexpr uint64_t kEntryCycles = 15, kReturnCycles = 13;
 constexpr uint32_t kExceptionExit = 8;  // Unicorn's interrupt number for an EXC_RETURN branch
 constexpr uint32_t kBreakpoint = 7;     // ... for BKPT
 constexpr uint32_t kIobusBase = 0x60000000;
-
-std::string hex(uint32_t v) {
-  char text[16];
-  std::snprintf(text, sizeof text, "0x%08X", v);
-  return text;
-}
 
 const char* fault_name(uint32_t intno) {
   switch (intno) {
@@ -66,7 +60,7 @@ void Cpu::set_reg(int id, uint32_t value) { uc_reg_write(uc_, id, &value); }
 uint32_t Cpu::pc() const { return reg(UC_ARM_REG_PC); }
 
 std::string Cpu::where(uint32_t address) const {
-  return image_.function_at(address) + " (" + hex(address) + ")";
+  return image_.function_at(address) + " (" + hex32(address) + ")";
 }
 
 // RAM is the engine's memory mapped from ram_: the exception frames and the DMAC's transfers
@@ -121,7 +115,7 @@ bool Cpu::init(std::string& error) {
   Nvmctrl& nvm = chip_.nvmctrl();
   for (const Segment& s : image_.segments) {
     if (s.address < kFlashBase || !nvm.load_flash(s.address, s.bytes)) {
-      error = "the image has bytes at " + hex(s.address) + ", outside the SAMD21G18's 256 KB "
+      error = "the image has bytes at " + hex32(s.address) + ", outside the SAMD21G18's 256 KB "
               "flash: linked for another chip or address";
       return false;
     }
@@ -158,17 +152,17 @@ bool Cpu::init(std::string& error) {
 bool Cpu::reset(uint32_t vector_table, std::string& error) {
   uint32_t words[2];
   if (!read(vector_table, words, 8)) {
-    error = "no vector table at " + hex(vector_table);
+    error = "no vector table at " + hex32(vector_table);
     return false;
   }
   const uint32_t sp = words[0], entry = words[1];
   if (sp < kRamBase || sp > kRamBase + kRamSize || (sp & 3) != 0) {
-    error = "the vector table at " + hex(vector_table) + " gives initial SP " + hex(sp) +
+    error = "the vector table at " + hex32(vector_table) + " gives initial SP " + hex32(sp) +
             ", not in the SAMD21G18's RAM (0x20000000-0x20008000)";
     return false;
   }
   if ((entry & 1) == 0 || (entry & ~1u) >= kFlashSize || (entry & ~1u) < vector_table) {
-    error = "the vector table at " + hex(vector_table) + " gives reset handler " + hex(entry) +
+    error = "the vector table at " + hex32(vector_table) + " gives reset handler " + hex32(entry) +
             ", not a Thumb address in the image's flash";
     return false;
   }
@@ -328,7 +322,7 @@ bool Cpu::on_invalid(uc_engine*, uc_mem_type type, uint64_t address, int size, i
     case UC_MEM_WRITE_UNMAPPED: what = "write to unmapped"; break;
     default: break;
   }
-  cpu.chip_.violation(std::string(what) + " " + hex(static_cast<uint32_t>(address)) + " (" +
+  cpu.chip_.violation(std::string(what) + " " + hex32(static_cast<uint32_t>(address)) + " (" +
                       std::to_string(size) + " bytes)");
   return false;
 }
@@ -355,7 +349,7 @@ void Cpu::semihost_call() {
   const uint32_t pc = reg(UC_ARM_REG_PC) & ~1u;
   uint16_t op = 0;
   if (!read(pc, &op, 2) || op != 0xBEAB) {
-    chip_.violation("breakpoint (BKPT " + hex(op) + ") that is not a semihosting call");
+    chip_.violation("breakpoint (BKPT " + hex32(op) + ") that is not a semihosting call");
     return;
   }
   const uint32_t call = reg(UC_ARM_REG_R0), arg = reg(UC_ARM_REG_R1);
@@ -366,7 +360,7 @@ void Cpu::semihost_call() {
     exited_ = true;
     exit_ok_ = arg == 0x20026;
   } else {
-    chip_.violation("semihosting call " + hex(call) + " is not modelled (SYS_WRITE0, SYS_EXIT are)");
+    chip_.violation("semihosting call " + hex32(call) + " is not modelled (SYS_WRITE0, SYS_EXIT are)");
     return;
   }
   set_reg(UC_ARM_REG_PC, (pc + 2) | 1u);
@@ -393,13 +387,13 @@ void Cpu::enter_exception(unsigned exception) {
                              reg(UC_ARM_REG_R3), reg(UC_ARM_REG_R12), reg(UC_ARM_REG_LR),
                              reg(UC_ARM_REG_PC), xpsr};
   if (!write(sp, frame, sizeof frame)) {
-    chip_.violation("stack overflow: exception frame at " + hex(sp) + " is outside RAM");
+    chip_.violation("stack overflow: exception frame at " + hex32(sp) + " is outside RAM");
     return;
   }
   uint32_t vector = 0;
   if (!read(chip_.scs().vtor() + 4 * exception, &vector, 4) || (vector & 1) == 0) {
     chip_.violation("vector " + std::to_string(exception) + " at VTOR " +
-                    hex(chip_.scs().vtor()) + " is not a Thumb address in flash: " + hex(vector));
+                    hex32(chip_.scs().vtor()) + " is not a Thumb address in flash: " + hex32(vector));
     return;
   }
   const uint64_t entered = chip_.cycles();
@@ -427,13 +421,13 @@ void Cpu::enter_exception(unsigned exception) {
 void Cpu::return_from_exception() {
   const uint32_t exc_return = reg(UC_ARM_REG_PC) | 1u;
   if (exc_return != 0xFFFFFFF1u && exc_return != 0xFFFFFFF9u) {
-    chip_.violation("EXC_RETURN " + hex(exc_return) + ": only the main stack is modelled");
+    chip_.violation("EXC_RETURN " + hex32(exc_return) + ": only the main stack is modelled");
     return;
   }
   uint32_t sp = reg(UC_ARM_REG_SP);
   uint32_t frame[8];
   if (!read(sp, frame, sizeof frame)) {
-    chip_.violation("exception return with the stack at " + hex(sp) + ", outside RAM");
+    chip_.violation("exception return with the stack at " + hex32(sp) + ", outside RAM");
     return;
   }
   sp += 32;

@@ -8,36 +8,11 @@
 # The images come from the firmware preset. Without them the test is skipped (exit 77), unless
 # CI is set: then their absence is a failure.
 set -uo pipefail
-emu=$1
-images=$2
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-failures=0
-checks=0
-
-if [[ ! -f $images/hmc-firmware.elf || ! -f $images/hmc-firmware-nobl.elf ]]; then
-  if [[ ${CI:-} == true ]]; then
-    echo "FAIL: no firmware images in $images (build the firmware preset first)"
-    exit 1
-  fi
-  echo "SKIP: no firmware images in $images (cmake --preset firmware && cmake --build --preset firmware)"
-  exit 77
-fi
-
-check() {
-  checks=$((checks + 1))
-  if [[ $2 != "$3" ]]; then
-    failures=$((failures + 1))
-    printf 'FAIL %s:\n  want: %s\n  got:  %s\n' "$1" "$2" "$3"
-  fi
-}
-check_match() {
-  checks=$((checks + 1))
-  if ! grep -Eq -- "$2" <<<"$3"; then
-    failures=$((failures + 1))
-    printf 'FAIL %s: no match for %s in:\n%s\n' "$1" "$2" "$3"
-  fi
-}
+emu=$(realpath "$1")
+images=$(realpath -m "$2")
+# shellcheck source=SCRIPTDIR/../../cli/sim_test_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/../../cli/sim_test_lib.sh"
+require_built "$images/hmc-firmware.elf" "$images/hmc-firmware-nobl.elf"
 
 ver='STX#1#VER#0#ETX'
 boot_out="STX#3#EVB#6#100#106#ETX

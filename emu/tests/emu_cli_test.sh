@@ -5,38 +5,17 @@
 # Usage: emu_cli_test.sh HMC_EMU HMC IMAGE_DIR
 # Without the image the test is skipped (exit 77), unless CI is set: then it fails.
 set -uo pipefail
-emu=$1
-hmc=$2
-image=$3/hmc-firmware.elf
-work=$(mktemp -d)
-emu_pid=
-trap '[[ -n $emu_pid ]] && kill "$emu_pid" 2>/dev/null; wait 2>/dev/null; rm -rf "$work"' EXIT
-failures=0
-
-if [[ ! -f $image ]]; then
-  if [[ ${CI:-} == true ]]; then
-    echo "FAIL: no firmware image $image (build the firmware preset first)"
-    exit 1
-  fi
-  echo "SKIP: no firmware image $image (cmake --preset firmware && cmake --build --preset firmware)"
-  exit 77
-fi
-
-expect() {  # NAME WANT_CODE REGEX -- COMMAND...
-  local name=$1 want=$2 regex=$3
-  shift 4
-  local out code
-  out=$("$@" 2>&1)
-  code=$?
-  if [[ $code != "$want" ]] || ! grep -Eq -- "$regex" <<<"$out"; then
-    failures=$((failures + 1))
-    printf 'FAIL %s: exit %s (want %s), no match for %s in:\n%s\n' "$name" "$code" "$want" "$regex" "$out"
-  fi
-}
+emu=$(realpath "$1")
+hmc=$(realpath "$2")
+image=$(realpath -m "$3")/hmc-firmware.elf
+# shellcheck source=SCRIPTDIR/../../cli/sim_test_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/../../cli/sim_test_lib.sh"
+require_built "$image"
 
 # Real time (the board's UART at its baud rate); the emulator prints the pty's path.
 "$emu" "$image" --pty >"$work/emu.out" 2>"$work/emu.err" &
 emu_pid=$!
+pids+=("$emu_pid")
 pty=
 for _ in $(seq 100); do
   pty=$(grep -o '/dev/pts/[0-9]*' "$work/emu.out" "$work/emu.err" | head -1 | cut -d: -f2)
@@ -68,9 +47,5 @@ expect move-wait 0 "^motor 1: done, at $end steps of 1/16" -- \
   "$hmc" --port "$pty" --timeout 5000 move 1 3200 --accel 8000 --wait
 expect status-after 0 "^1 +idle +$end +$end " -- "$hmc" --port "$pty" --timeout 5000 status
 
-if ! kill -0 "$emu_pid" 2>/dev/null; then
-  failures=$((failures + 1))
-  echo "FAIL: hmc-emu stopped: $(cat "$work/emu.err")"
-fi
-[[ $failures == 0 ]] && echo "emu_cli_test: all checks passed" || echo "emu_cli_test: $failures failed"
-[[ $failures == 0 ]]
+kill -0 "$emu_pid" 2>/dev/null || fail "hmc-emu stopped: $(cat "$work/emu.err")"
+finish emu_cli_test

@@ -7,29 +7,11 @@
 # Usage: emu_watchdog_test.sh HMC_EMU IMAGE_DIR
 # Without the image the test is skipped (exit 77), unless CI is set: then it fails.
 set -uo pipefail
-emu=$1
-image=$2/hmc-firmware.elf
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-failures=0
-
-if [[ ! -f $image ]]; then
-  if [[ ${CI:-} == true ]]; then
-    echo "FAIL: no firmware image $image (build the firmware preset first)"
-    exit 1
-  fi
-  echo "SKIP: no firmware image $image"
-  exit 77
-fi
-
-check() {
-  if [[ $2 != "$3" ]]; then
-    failures=$((failures + 1))
-    printf 'FAIL %s:\n  want: %s\n  got:  %s\n' "$1" "$2" "$3"
-  else
-    echo "ok   $1"
-  fi
-}
+emu=$(realpath "$1")
+image=$(realpath -m "$2")/hmc-firmware.elf
+# shellcheck source=SCRIPTDIR/../../cli/sim_test_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/../../cli/sim_test_lib.sh"
+require_built "$image"
 
 # Each run's script ends at 1.3 s, well past the stall plus the watchdog's period (the chip
 # resets about 0.5 s after the stall); with standard input empty the run ends 200 ms later.

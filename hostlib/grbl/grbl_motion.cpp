@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "hmc/axis_moves.h"
+
 namespace hmc::grbl {
 
 using namespace detail;
@@ -89,16 +91,16 @@ SessionResult<bool> FrontEnd::start(Action& action) {
 SessionResult<Done> FrontEnd::home_next() {
   const size_t a = homing_left_.front();
   const Axis& axis = *axes_[a].axis;
-  const AxisHoming& h = *axis.homing;
-  const double spu = axis.steps_per_unit();
-  const auto delay_of = [spu](double speed) { return static_cast<uint32_t>(std::llround(1e6 / (speed * spu))); };
+  const HomingSetup setup = homing_setup(axis, StepperMove{axis.motor, proto::kActionHome, 0, 0, 0});
+  // grbl owns the board while it runs: a pull-off or slow re-approach the profile leaves out is
+  // set to 0 (none), not left as an earlier session set it.
   std::vector<Command> commands;
-  commands.emplace_back(SetSetting{axis.motor, proto::kSettingHomeEnd, h.end});
-  commands.emplace_back(SetSetting{axis.motor, proto::kSettingHomePullOff,
-                                   static_cast<uint32_t>(std::llround(h.pull_off.value_or(0) * spu))});
-  commands.emplace_back(SetSetting{axis.motor, proto::kSettingHomeLocate, h.locate_speed ? delay_of(*h.locate_speed) : 0});
-  commands.emplace_back(StepperMove{axis.motor, proto::kActionHome, axis.microstep, 0,
-                                    h.seek_speed ? delay_of(*h.seek_speed) : 0});
+  for (const uint32_t setting : {proto::kSettingHomeEnd, proto::kSettingHomePullOff, proto::kSettingHomeLocate}) {
+    const auto given = std::find_if(setup.settings.begin(), setup.settings.end(),
+                                    [setting](const SetSetting& s) { return s.setting == setting; });
+    commands.emplace_back(given != setup.settings.end() ? *given : SetSetting{axis.motor, setting, 0});
+  }
+  commands.emplace_back(setup.move);
   SessionResult<Session::StreamReport> sent = session_.stream(commands);
   if (!sent) return sent.error();
   if (sent->refused) return alarm(9, std::string(1, kLetters[a]) + ": homing was refused: " + sent->why);

@@ -3,37 +3,11 @@
 # control channel and a script, and checks the board's answers, exit codes and trace.
 # Usage: hmc_sim_test.sh HMC_SIM_BINARY SOURCE_DIR BEHAVIOUR_SESSION_BINARY
 set -uo pipefail
-sim=$1
-src=$2
-session=$3
-work=$(mktemp -d)
-pids=()
-failures=0
-checks=0
-
-cleanup() {
-  for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null; done
-  rm -rf "$work"
-}
-trap cleanup EXIT
-
-# check NAME WANT GOT: GOT equals WANT.
-check() {
-  checks=$((checks + 1))
-  if [[ $2 != "$3" ]]; then
-    failures=$((failures + 1))
-    printf 'FAIL %s:\n  want: %s\n  got:  %s\n' "$1" "$2" "$3"
-  fi
-}
-
-# check_match NAME PATTERN TEXT: TEXT matches the extended regex PATTERN.
-check_match() {
-  checks=$((checks + 1))
-  if ! grep -Eq -- "$2" <<<"$3"; then
-    failures=$((failures + 1))
-    printf 'FAIL %s: no match for %s in:\n%s\n' "$1" "$2" "$3"
-  fi
-}
+sim=$(realpath "$1")
+src=$(realpath "$2")
+session=$(realpath "$3")
+# shellcheck source=SCRIPTDIR/../../../cli/sim_test_lib.sh
+source "$src/cli/sim_test_lib.sh"
 
 # frame NAME VALUES...: the frame with its length and checksum.
 frame() {
@@ -51,40 +25,6 @@ ack='STX#1#ACK#0#ETX'
 replies() { grep -v '^STX#[0-9]*#E' || true; }
 # nak REASON TOKEN OFFSET
 nak() { frame NAK "$@"; }
-
-# start NAME ARGS...: runs hmc-sim in the background, stderr to $work/NAME.err; sets $pid.
-start() {
-  local name=$1
-  shift
-  timeout 60 "$sim" "$@" 2>"$work/$name.err" &
-  pid=$!
-  pids+=("$pid")
-}
-
-# announced NAME SED_EXPRESSION: waits (10 s at most) for a line on NAME's stderr and prints
-# what the expression extracts from it.
-announced() {
-  local found
-  for _ in $(seq 100); do
-    found=$(sed -n "$2" "$work/$1.err")
-    if [[ -n $found ]]; then
-      echo "$found"
-      return 0
-    fi
-    sleep 0.1
-  done
-  echo "no announcement from hmc-sim ($1): $(cat "$work/$1.err")" >&2
-  return 1
-}
-tcp_port() { announced "$1" 's/^hmc-sim: listening on tcp:\/\/127\.0\.0\.1:\([0-9]*\)$/\1/p'; }
-control_port() { announced "$1" 's/^hmc-sim: control listening on tcp:\/\/127\.0\.0\.1:\([0-9]*\)$/\1/p'; }
-
-# stopped NAME SIGNAL: stops the hmc-sim last started and checks it exits 0.
-stopped() {
-  kill "-$2" "$pid"
-  wait "$pid"
-  check "$1: exit code after SIG$2" 0 $?
-}
 
 # ---------------------------------------------------------------------------------------
 # 1. stdio: the spec's 28 frames, in fast virtual time, answered in order exactly as the
