@@ -160,9 +160,7 @@ class Jogger {
       message_ = a.axis.name + " is moving: stop it (space) before zeroing";
       return Done{};
     }
-    const StepCount board = a.axis.to_board_position(0);
-    const SetPosition set{a.axis.motor, board.steps < 0 ? 1u : 0u, static_cast<uint32_t>(std::llabs(board.steps))};
-    if (SessionResult<BoardFrame> done = s_.execute(set); !done) return done.error();
+    if (SessionResult<BoardFrame> done = s_.execute(set_position_command(a.axis, 0)); !done) return done.error();
     a.target.reset();
     if (Status limits = send_soft_limits(s_, a.axis); !limits) {
       message_ = limits.error().message;

@@ -1,8 +1,6 @@
 // The machine profile chosen, loaded once per run, and its link settings applied.
 #include "profile_choice.h"
 
-#include <sys/stat.h>
-
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -16,22 +14,9 @@ namespace {
 
 bool given(const CLI::Option* option) { return option != nullptr && option->count() > 0; }
 
-bool file_exists(const std::string& path) {
-  struct stat info {};
-  return stat(path.c_str(), &info) == 0;
-}
-
 }  // namespace
 
-Result<ProfileChoice> choose_profile(const GlobalOptions& o) {
-  if (!o.profile.empty()) return ProfileChoice{o.profile, "--profile", file_exists(o.profile)};
-  if (const char* env = std::getenv("HMC_PROFILE"); env != nullptr && env[0] != '\0') {
-    return ProfileChoice{env, "HMC_PROFILE", file_exists(env)};
-  }
-  Result<std::string> path = default_profile_path();
-  if (!path) return path.error();
-  return ProfileChoice{*path, "default", file_exists(*path)};
-}
+Result<ProfileChoice> choose_profile(const GlobalOptions& o) { return find_profile(o.profile); }
 
 int report_profile_error(const GlobalOptions& o, const ProfileError& error) {
   if (o.json) {

@@ -10,13 +10,9 @@
 
 namespace hmc::cli {
 
-struct ProfileChoice {
-  std::string path;
-  std::string from;  // "--profile", "HMC_PROFILE" or "default"
-  bool exists = false;
-};
+using ProfileChoice = ProfileSource;
 
-// --profile, else HMC_PROFILE, else the default path ($XDG_CONFIG_HOME/hmc/config.toml).
+// --profile, else HMC_PROFILE, else the default path ($XDG_CONFIG_HOME/hmc/config.toml): libhmc's find_profile.
 Result<ProfileChoice> choose_profile(const GlobalOptions& options);
 
 // The profile in use, loaded and checked on first use: nullptr when none is named and the

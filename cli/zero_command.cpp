@@ -51,13 +51,11 @@ void add_zero_command(CLI::App& app, const GlobalOptions& g, int& exit_code) {
       return;
     }
     const double units = steps->exact / axis->steps_per_unit();
-    const StepCount board = axis->to_board_position(units);
     if (steps->rounded() && !g.json) {
       std::cerr << "note: " << o->position << " on axis '" << axis->name << "' is " << number_text(steps->exact)
                 << " steps: rounded to " << steps->steps << '\n';
     }
-    const SetPosition set{axis->motor, board.steps < 0 ? 1u : 0u, static_cast<uint32_t>(std::llabs(board.steps))};
-    if (SessionResult<BoardFrame> done = s->execute(set); !done) {
+    if (SessionResult<BoardFrame> done = s->execute(set_position_command(*axis, units)); !done) {
       exit_code = report_error(g, done.error());
       return;
     }

@@ -4,8 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <string>
 #include <utility>
 
+#include "hmc/axis_moves.h"
+#include "hmc/jog.h"
 #include "hmc/motion_file.h"
 #include "hmc/motion_runner.h"
 #include "hmc/transport.h"
@@ -28,7 +32,17 @@ uint32_t delay_of(uint32_t rate) {
 
 }  // namespace
 
-BoardWorker::BoardWorker() : thread_([this] { loop(); }) {}
+BoardWorker::BoardWorker(const Profile* profile) : profile_(profile), thread_([this] { loop(); }) {}
+
+Axis BoardWorker::axis_of(const Profile* profile, uint32_t m, uint32_t microstep, bool* described) {
+  const Axis* axis = profile != nullptr ? profile->axis_of_motor(m) : nullptr;
+  if (described != nullptr) *described = axis != nullptr;
+  return axis != nullptr ? *axis : plain_motor_axis(m, microstep);
+}
+
+void BoardWorker::stick_heartbeat() {
+  stick_alive_ns_ = std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
+}
 
 BoardWorker::~BoardWorker() {
   quit_ = true;
@@ -84,11 +98,23 @@ void BoardWorker::loop() {
     if (stop_requested_.exchange(false) && session_) {
       // The wait that saw the flag has stopped every motor already; once more costs three
       // short frames and covers a flag raised between waits.
+      for (auto& target : jog_target_) target.reset();
+      for (bool& running : stick_running_) running = false;
       if (SessionResult<Done> stopped = session_->stop_all(); !stopped) {
         report(stopped.error(), "stop all");
       } else {
         log(LogLine::Kind::kInfo, "STOP ALL: every motor was sent a stop");
       }
+      publish();
+    }
+    // The gamepad's runs last only while the panel says so: a lost release is a motor running.
+    const Clock::time_point alive{std::chrono::duration_cast<Clock::duration>(std::chrono::nanoseconds(stick_alive_ns_.load()))};
+    for (uint32_t m = 1; m <= proto::kMotorCount && session_; ++m) {
+      if (!stick_running_[m - 1] || Clock::now() - alive < kStickSilence) continue;
+      stick_running_[m - 1] = false;
+      log(LogLine::Kind::kError, "gamepad: no word from the panel for " + std::to_string(kStickSilence.count()) +
+                                     " ms: motor " + std::to_string(m) + " stopped");
+      send(StepperMove{m, proto::kActionStop, 0, 0, 0}, "motor " + std::to_string(m) + ": stop");
       publish();
     }
     std::optional<Request> request;
@@ -138,21 +164,10 @@ void BoardWorker::handle(const Request& q) {
   }
   const uint32_t m = std::clamp<uint32_t>(q.unit, 1, proto::kMotorCount);
   const uint32_t microstep = session_->model().motor(m).microstep;
-  const bool v2 = session_->firmware() == Firmware::kV2;
-  // The acceleration the board ramps with (v2 only), sent when it changes.
-  auto set_accel = [&]() -> bool {
-    if (!v2 || (accel_sent_[m - 1] && *accel_sent_[m - 1] == q.accel)) return true;
-    SessionResult<BoardFrame> set = session_->execute(SetSetting{m, proto::kSettingAccel, q.accel});
-    if (!set) {
-      report(set.error(), "motor " + std::to_string(m) + " acceleration");
-      return false;
-    }
-    accel_sent_[m - 1] = q.accel;
-    return true;
-  };
+  const auto set_accel_q = [&] { return set_accel(m, q.accel); };
   switch (q.kind) {
     case K::kMove: {
-      if (q.steps == 0 || !set_accel()) return;
+      if (q.steps == 0 || !set_accel_q()) return;
       const uint32_t dir = q.steps < 0 ? proto::kActionReverse : proto::kActionForward;
       const auto steps = static_cast<uint32_t>(std::min<int64_t>(std::llabs(q.steps), 2147483647));
       send(StepperMove{m, dir, microstep, steps, delay_of(q.rate)},
@@ -161,7 +176,7 @@ void BoardWorker::handle(const Request& q) {
       return;
     }
     case K::kRun:
-      if (!set_accel()) return;
+      if (!set_accel_q()) return;
       send(StepperMove{m, q.reverse ? proto::kActionReverse : proto::kActionForward, microstep, 0, delay_of(q.rate)},
            "motor " + std::to_string(m) + ": run " + (q.reverse ? "reverse" : "forward") + " until stopped");
       return;
@@ -169,6 +184,8 @@ void BoardWorker::handle(const Request& q) {
       send(StepperMove{m, proto::kActionHome, 0, 0, 0}, "motor " + std::to_string(m) + ": home");
       return;
     case K::kStop:
+      jog_target_[m - 1].reset();
+      stick_running_[m - 1] = false;
       send(StepperMove{m, proto::kActionStop, 0, 0, 0}, "motor " + std::to_string(m) + ": stop");
       return;
     case K::kServo:
@@ -180,6 +197,10 @@ void BoardWorker::handle(const Request& q) {
                                                      std::to_string(q.w));
       return;
     case K::kRunFile: run_file(); return;
+    case K::kJog: jog(q); return;
+    case K::kGoTo: go_to(q); return;
+    case K::kZero: zero(m); return;
+    case K::kStickRun: stick_run(q); return;
     default: return;
   }
 }
@@ -226,6 +247,8 @@ void BoardWorker::connect(const Request& q) {
     log(LogLine::Kind::kInfo, "no link watchdog: " + watched.error().message);
   }
   for (auto& a : accel_sent_) a.reset();
+  for (auto& target : jog_target_) target.reset();
+  for (bool& running : stick_running_) running = false;
   last_refresh_ = Clock::now();
   log(LogLine::Kind::kInfo, "connected: " + session_->description());
   std::lock_guard<std::mutex> lock(mutex_);
@@ -355,6 +378,153 @@ void BoardWorker::run_file() {
   }
   std::lock_guard<std::mutex> lock(mutex_);
   snap_.running = false;
+}
+
+bool BoardWorker::set_accel(uint32_t m, uint32_t accel) {
+  if (session_->firmware() != Firmware::kV2 || (accel_sent_[m - 1] && *accel_sent_[m - 1] == accel)) return true;
+  SessionResult<BoardFrame> set = session_->execute(SetSetting{m, proto::kSettingAccel, accel});
+  if (!set) {
+    report(set.error(), "motor " + std::to_string(m) + " acceleration");
+    return false;
+  }
+  accel_sent_[m - 1] = accel;
+  return true;
+}
+
+bool BoardWorker::stop_if_moving(uint32_t m) {
+  if (session_->model().motor(m).state == MotorState::kIdle) return true;
+  if (SessionResult<Done> stopped = session_->stop({m}); !stopped) {
+    report(stopped.error(), "motor " + std::to_string(m) + ": stop");
+    return false;
+  }
+  return true;
+}
+
+bool BoardWorker::move_to(uint32_t m, double target, const Request& q) {
+  const Axis axis = axis_of(profile_, m, session_->model().motor(m).microstep);
+  const std::string unit = unit_name(axis.unit());
+  Result<UnitMove> planned = unit_move(axis, session_->model().motor(m),
+                                       UnitMoveRequest{number_text(target, 6) + unit, std::nullopt, std::nullopt, std::nullopt});
+  if (!planned) {
+    log(LogLine::Kind::kError, axis.name + ": " + planned.error().message);
+    return false;
+  }
+  for (const std::string& note : planned->notes) log(LogLine::Kind::kInfo, axis.name + ": note: " + note);
+  if (!planned->move) return true;  // already there
+  StepperMove move = *planned->move;
+  // The profile's speed and acceleration when it gives them, else the motor panel's.
+  move.delay_us = planned->delay_us ? *planned->delay_us : delay_of(q.rate);
+  if (!set_accel(m, planned->accel ? *planned->accel : q.accel)) return false;
+  const std::string what = axis.name + ": to " + number_text(target) + " " + unit + " (" +
+                           std::to_string(planned->target_position * axis.microstep / 256) + " steps)";
+  log(LogLine::Kind::kInfo, what);
+  SessionResult<BoardFrame> reply = session_->execute(move);
+  if (!reply) {
+    report(reply.error(), what);
+    return false;
+  }
+  return true;
+}
+
+void BoardWorker::jog(const Request& q) {
+  const uint32_t m = q.unit;
+  bool described = false;
+  const Axis axis = axis_of(profile_, m, session_->model().motor(m).microstep, &described);
+  const MotorStatus& motor = session_->model().motor(m);
+  const bool moving = motor.state != MotorState::kIdle;
+  const size_t level = std::min(q.level, kJogProfileSteps.size() - 1);
+  const double step = described ? kJogProfileSteps[level] : kJogMotorSteps[level] / axis.steps_per_unit();
+  // A key while the jog still runs adds to where that jog ends, as `hmc jog` does.
+  const double from = moving && jog_target_[m - 1] ? *jog_target_[m - 1] : axis.from_board_position(motor.position);
+  const JogEnd end = jog_end(axis, motor, from, q.dir * step * (q.fast ? kJogShiftFactor : 1));
+  if (end.at_limit) {
+    log(LogLine::Kind::kInfo, axis.name + " stops at its soft limit " + number_text(end.target) + " " + unit_name(axis.unit()));
+  }
+  if (!stop_if_moving(m)) return;
+  if (move_to(m, end.target, q)) jog_target_[m - 1] = end.target;
+}
+
+void BoardWorker::go_to(const Request& q) {
+  const uint32_t m = q.unit;
+  bool described = false;
+  const Axis axis = axis_of(profile_, m, session_->model().motor(m).microstep, &described);
+  // A bare number is in the axis's unit: mm or deg, steps on a motor no profile axis drives.
+  std::string text = q.text;
+  char* end = nullptr;
+  std::strtod(text.c_str(), &end);
+  if (!text.empty() && end != nullptr && *end == '\0') text += described ? unit_name(axis.unit()) : "steps";
+  Result<Quantity> quantity = parse_quantity(text);
+  if (!quantity) {
+    log(LogLine::Kind::kError, axis.name + ": go to '" + q.text + "': " + quantity.error().message);
+    return;
+  }
+  Result<StepCount> steps = axis.to_steps(*quantity, Dimension::kPosition);
+  if (!steps) {
+    log(LogLine::Kind::kError, axis.name + ": go to '" + q.text + "': " + steps.error().message);
+    return;
+  }
+  const double target = steps->exact / axis.steps_per_unit();
+  if (std::optional<std::string> beyond = beyond_soft_limits(axis, session_->model().motor(m), target)) {
+    log(LogLine::Kind::kError, *beyond + ": not sent");
+    return;
+  }
+  if (!stop_if_moving(m)) return;
+  jog_target_[m - 1].reset();
+  move_to(m, target, q);
+}
+
+void BoardWorker::zero(uint32_t m) {
+  const Axis axis = axis_of(profile_, m, session_->model().motor(m).microstep);
+  if (SessionResult<Done> able = session_->require(proto::Feature::kSetPosition); !able) {
+    report(able.error(), axis.name + ": set zero");
+    return;
+  }
+  if (session_->model().motor(m).state != MotorState::kIdle) {
+    log(LogLine::Kind::kError, axis.name + " is moving: stop it before setting its zero");
+    return;
+  }
+  jog_target_[m - 1].reset();
+  send(set_position_command(axis, 0), axis.name + ": zero here");
+  // Its position means something now: the profile's soft limits go to the board (as `hmc zero`).
+  const std::optional<SoftLimits> limits = soft_limits_command(axis);
+  if (limits && session_ && session_->model().motor(m).homed) send(*limits, axis.name + ": soft limits to the board");
+}
+
+void BoardWorker::stick_run(const Request& q) {
+  const uint32_t m = q.unit;
+  if (!stop_if_moving(m) || !set_accel(m, q.accel)) return;
+  const Axis axis = axis_of(profile_, m, session_->model().motor(m).microstep);
+  const MotorStatus& motor = session_->model().motor(m);
+  const double here = axis.from_board_position(motor.position);
+  // Where the soft limits apply the run is a move to the limit ahead: it stops there by itself.
+  const double far = 1e12;
+  const JogEnd end = jog_end(axis, motor, here, q.reverse ? -far : far);
+  jog_target_[m - 1].reset();
+  StepperMove move;
+  if (end.at_limit) {
+    Result<UnitMove> planned =
+        unit_move(axis, motor, UnitMoveRequest{number_text(end.target, 6) + unit_name(axis.unit()), std::nullopt, std::nullopt, std::nullopt});
+    if (!planned || !planned->move) {
+      log(LogLine::Kind::kInfo, axis.name + " is at its soft limit " + number_text(end.target) + " " + unit_name(axis.unit()));
+      return;
+    }
+    move = *planned->move;
+    log(LogLine::Kind::kInfo, axis.name + ": gamepad, " + std::to_string(q.rate) + " steps/s, up to its soft limit " +
+                                  number_text(end.target) + " " + unit_name(axis.unit()));
+  } else {
+    // Positive is the axis's direction: the motor's reverse on an inverted axis.
+    const bool forward = q.reverse == axis.invert;
+    move = StepperMove{m, forward ? proto::kActionForward : proto::kActionReverse, axis.microstep, 0, 0};
+    log(LogLine::Kind::kInfo, axis.name + ": gamepad, " + std::to_string(q.rate) + " steps/s " + (q.reverse ? "-" : "+") +
+                                  " until let go");
+  }
+  move.delay_us = delay_of(q.rate);
+  SessionResult<BoardFrame> reply = session_->execute(move);
+  if (!reply) {
+    report(reply.error(), axis.name + ": gamepad run");
+    return;
+  }
+  stick_running_[m - 1] = true;
 }
 
 }  // namespace hmc::desk

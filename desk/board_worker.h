@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "hmc/motion_plan.h"
+#include "hmc/profile.h"
 #include "hmc/session.h"
 
 namespace hmc::desk {
@@ -62,6 +63,10 @@ struct Snapshot {
 struct Request {
   enum class Kind : uint8_t {
     kConnect, kDisconnect, kMove, kRun, kHome, kStop, kServo, kLed, kOpenFile, kRunFile,
+    kJog,       // a jog key: `dir` one jog step (kJogProfileSteps/kJogMotorSteps[level]) of the axis
+    kGoTo,      // to the absolute position `text` ("250mm", "-90deg", "250": the axis's unit)
+    kZero,      // set zero here (protocol 6)
+    kStickRun,  // the gamepad: run at `rate` (`reverse`), up to the soft limit where it applies
   };
   explicit Request(Kind k, std::string t = {}) : kind(k), text(std::move(t)) {}
   Kind kind;
@@ -74,13 +79,17 @@ struct Request {
   uint32_t accel = 0;    // steps/s², 0: constant rate (v2 only)
   uint32_t angle = 90;
   uint32_t r = 0, g = 0, b = 0, w = 0;
+  int dir = 1;           // jog: +1 or -1, in the axis's sense
+  bool fast = false;     // jog: Shift held
+  size_t level = 1;      // jog: the step size's index
 };
 
 class BoardWorker {
  public:
   static constexpr size_t kLogLimit = 400;
 
-  BoardWorker();
+  // `profile` (may be null; it must outlive the worker) names the axes and gives their units.
+  explicit BoardWorker(const Profile* profile = nullptr);
   ~BoardWorker();
   BoardWorker(const BoardWorker&) = delete;
   BoardWorker& operator=(const BoardWorker&) = delete;
@@ -92,6 +101,14 @@ class BoardWorker {
   // Ends a running motion file (its motors are stopped, like STOP ALL).
   void stop_run() { stop_all(); }
   Snapshot snapshot() const;
+  // The panel, once a frame while the gamepad holds an axis running: without it for
+  // kStickSilence (the panel hung, the window is being dragged) the worker stops those axes.
+  void stick_heartbeat();
+  static constexpr Millis kStickSilence{500};
+
+  // The axis motor `m` drives: the profile's, or a bare motor counted in steps (plain_motor_axis
+  // at `microstep`). `described` says which.
+  static Axis axis_of(const Profile* profile, uint32_t m, uint32_t microstep, bool* described = nullptr);
 
  private:
   void loop();
@@ -101,6 +118,16 @@ class BoardWorker {
   void send(const Command& command, const std::string& what);
   void open_file(const std::string& path);
   void run_file();
+  void jog(const Request& request);
+  void go_to(const Request& request);
+  void zero(uint32_t motor);
+  void stick_run(const Request& request);
+  // Brings motor `m` to `target` (axis units) as an absolute move; false when it was not sent.
+  bool move_to(uint32_t m, double target, const Request& request);
+  // Sets motor m's acceleration when it differs from the one sent last (v2 only).
+  bool set_accel(uint32_t m, uint32_t accel);
+  // Stops motor m if it moves; false when the stop failed (reported).
+  bool stop_if_moving(uint32_t m);
   // Reports a session error: a link failure ends the connection.
   void report(const SessionError& error, const std::string& what);
   void log(LogLine::Kind kind, std::string text);
@@ -112,10 +139,14 @@ class BoardWorker {
   Snapshot snap_;
   std::atomic<bool> stop_requested_{false};
   std::atomic<bool> quit_{false};
+  std::atomic<int64_t> stick_alive_ns_{0};  // steady clock, the panel's last heartbeat
+  const Profile* profile_;
 
   // Worker thread only
   std::unique_ptr<Session> session_;
   std::optional<uint32_t> accel_sent_[proto::kMotorCount];
+  std::optional<double> jog_target_[proto::kMotorCount];  // axis units: the end of the jog under way
+  bool stick_running_[proto::kMotorCount] = {};           // started by the gamepad, not stopped yet
   bool quiet_ = false;  // a status refresh: its queries and replies are not logged
   Clock::time_point started_ = Clock::now();
   Clock::time_point last_refresh_ = Clock::now();

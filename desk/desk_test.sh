@@ -117,5 +117,106 @@ for shot in connected jog-led moving stopped; do
     awk -v s="$spread" 'BEGIN { exit !(s > 0.01) }' || fail "$shot.png is blank (standard deviation $spread)"
   fi
 done
+echo "desk_test: screenshots 1280x800, not blank"
+
+# In the rig's terms: the camera slider's profile (slide = motor 1, 80 steps per mm, soft limits
+# 0-310 mm, 50 mm/s), `hmc jog`'s keys, the scripted gamepad, set zero and a saved position.
+trace2="$work/trace2.jsonl"
+mkdir -p "$work/state2" "$work/xdg-state"
+cat >"$work/script2.txt" <<EOF
+connect
+wait-for connected 5000
+wait 300
+# Set zero here: POS, then the profile's limits (LIM) since the position now means something.
+click "motor 1/Set zero here"
+wait 300
+wait-for idle 3000
+# Right: +1 mm; Shift+Right: +10 mm; '-' then Right: +0.1 mm (absolute targets 1, 11, 11.1 mm).
+key Right
+wait-for idle 3000
+key shift+Right
+wait-for idle 3000
+key -
+key Right
+wait-for idle 3000
+# Up: the bare motor 2, 10 steps at the middle step size.
+key +
+key Up
+wait-for idle 3000
+screenshot units
+# Saved here, then away (Shift+Left: -10 mm), then back: an absolute move to 11.1 mm.
+text "positions/name" start
+click "positions/Save here"
+wait 200
+key shift+Left
+wait-for idle 3000
+click "positions/start/Go to"
+wait 300
+wait-for idle 3000
+# Shift+Left with 10 mm steps is -100 mm: it stops at the soft limit, 0 mm.
+key +
+key shift+Left
+wait 300
+wait-for idle 5000
+# Go to beyond the limits: refused, nothing sent; then 25 mm typed in.
+text "motor 1/go to" 400
+click "motor 1/Go"
+wait 200
+text "motor 1/go to" 25
+click "motor 1/Go"
+wait 300
+wait-for idle 3000
+# The gamepad: the left stick right runs the slide (up to its soft limit), let go stops it.
+stick LX 1.0
+wait 300
+stick LX 0
+wait 200
+wait-for idle 3000
+# The right stick up runs motor 3 (no limits: until stopped); B stops everything.
+stick RY -0.6
+wait 300
+button B down
+wait 200
+button B up
+stick RY 0
+wait-for idle 3000
+# Held while the window loses the focus: stopped; the focus back, the held stick starts nothing.
+stick RY -1
+wait 300
+focus lost
+wait 300
+focus back
+wait 300
+stick RY 0
+wait-for idle 3000
+# Held while the panel hangs: the worker stops the run itself after 500 ms.
+stick RY -1
+wait 200
+hang 1200
+stick RY 0
+wait 300
+wait-for idle 3000
+# Space stops everything: a long go-to on motor 3 (steps, no profile axis), then space.
+text "motor 3/go to" 400000
+click "motor 3/Go"
+wait 400
+key space
+wait 300
+wait-for idle 3000
+screenshot gamepad
+quit
+EOF
+start2=$(date +%s)
+ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0" \
+HMC_SIM_STATE="$work/state2" XDG_STATE_HOME="$work/xdg-state" DISPLAY="$display" timeout 60 "$desk" \
+  --profile "$source_dir/examples/camera-slider.toml" \
+  --port "sim://desktest2?fresh&trace=$trace2" --script "$work/script2.txt" --screenshot-dir "$work/shots" \
+  >"$work/desk2.log" 2>&1 || fail "hmc-desk (profile) failed: $(cat "$work/desk2.log")"
+echo "desk_test: hmc-desk ran the profile script in $(($(date +%s) - start2)) s"
+/usr/bin/python3 "$source_dir/desk/desk_trace_check.py" "$trace2" "$work/xdg-state/hmc/positions.json" \
+  "$(realpath "$source_dir/examples/camera-slider.toml")" || fail "the profile script's trace (above)"
+for shot in units gamepad; do
+  [[ -s "$work/shots/$shot.png" ]] || fail "no screenshot $shot.png"
+done
 [[ -n "${DESK_TEST_KEEP:-}" ]] && cp "$work"/shots/*.png "$DESK_TEST_KEEP"/
-echo "desk_test: screenshots 1280x800, not blank; done in $(($(date +%s) - start)) s"
+echo "desk_test: done in $(($(date +%s) - start)) s"

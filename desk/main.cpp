@@ -1,6 +1,7 @@
 // hmc-desk: the desktop panel for the board. Opens the window (GLFW, OpenGL 3, Dear ImGui),
-// starts the board worker and draws the panel once a frame; with --script it plays a test
-// script against the panel and saves screenshots.
+// loads the machine profile (as the hmc command does: --profile, HMC_PROFILE, the default path),
+// starts the board worker and draws the panel once a frame, reading the keyboard and the gamepad;
+// with --script it plays a test script against the panel and saves screenshots.
 #include <GLFW/glfw3.h>
 #include <imgui.h>
 #include <imgui_impl_glfw.h>
@@ -8,11 +9,13 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <string>
 #include <sys/stat.h>
 #include <vector>
 
 #include "board_worker.h"
+#include "gamepad.h"
 #include "panel.h"
 #include "png_writer.h"
 #include "script.h"
@@ -24,13 +27,33 @@ constexpr int kHeight = 800;
 
 void usage(FILE* out) {
   std::fputs(
-      "usage: hmc-desk [--port PORT] [--baud N] [--script FILE --screenshot-dir DIR]\n"
+      "usage: hmc-desk [--profile FILE] [--port PORT] [--baud N] [--script FILE --screenshot-dir DIR]\n"
+      "  --profile FILE       the machine profile (docs/config.md); default: HMC_PROFILE, else\n"
+      "                       $XDG_CONFIG_HOME/hmc/config.toml when it exists\n"
       "  --port PORT          the board's port (sim://desk, tcp://HOST:PORT, /dev/ttyUSB0);\n"
-      "                       without --script the panel connects to it at once\n"
-      "  --baud N             serial speed (default 115200)\n"
+      "                       default: the profile's; the panel connects to it at once\n"
+      "  --baud N             serial speed (default: the profile's, else 115200)\n"
       "  --script FILE        test mode: play FILE against the panel (docs/desk.md)\n"
       "  --screenshot-dir DIR where the script's screenshots go (default .)\n",
       out);
+}
+
+// Presses a key the script names, as GLFW's key callback would ("Right", "shift+PageUp", "+",
+// "space"): a key code held for one frame, or a typed character. Returns the key code held.
+int press_scripted_key(const std::string& name, ImGuiIO& io) {
+  const bool shift = name.rfind("shift+", 0) == 0;
+  const std::string key = shift ? name.substr(6) : name;
+  static const std::pair<const char*, int> kKeys[] = {{"Right", GLFW_KEY_RIGHT}, {"Left", GLFW_KEY_LEFT},
+                                                      {"Up", GLFW_KEY_UP},       {"Down", GLFW_KEY_DOWN},
+                                                      {"PageUp", GLFW_KEY_PAGE_UP}, {"PageDown", GLFW_KEY_PAGE_DOWN}};
+  for (const auto& [text, code] : kKeys) {
+    if (key != text) continue;
+    io.KeysDown[code] = true;
+    io.KeyShift = shift;
+    return code;
+  }
+  io.AddInputCharacter(key == "space" ? ' ' : static_cast<unsigned char>(key.empty() ? 0 : key[0]));
+  return -1;
 }
 
 // The frame just drawn (the back buffer), top row first, as a PNG.
@@ -75,8 +98,8 @@ void style_panel() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string port, script_path, shot_dir = ".";
-  uint32_t baud = hmc::kDefaultBaud;
+  std::string port, script_path, shot_dir = ".", profile_path;
+  std::optional<uint32_t> baud;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&]() -> std::string {
@@ -86,7 +109,9 @@ int main(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (a == "--port") {
+    if (a == "--profile") {
+      profile_path = value();
+    } else if (a == "--port") {
       port = value();
     } else if (a == "--baud") {
       baud = static_cast<uint32_t>(std::strtoul(value().c_str(), nullptr, 10));
@@ -103,6 +128,24 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+
+  // The profile as the hmc command finds it; one with mistakes is reported and nothing starts.
+  std::optional<hmc::Profile> profile;
+  if (hmc::Result<hmc::ProfileSource> source = hmc::find_profile(profile_path); source && source->exists) {
+    hmc::Result<hmc::Profile, hmc::ProfileError> loaded = hmc::load_profile(source->path);
+    if (!loaded) {
+      std::fprintf(stderr, "%s", loaded.error().text().c_str());
+      std::fprintf(stderr, "hmc-desk: the profile (%s) has mistakes: fix them, or name another with --profile\n",
+                   source->from.c_str());
+      return 1;
+    }
+    profile = std::move(*loaded);
+  } else if (source && source->from != "default") {
+    std::fprintf(stderr, "hmc-desk: the profile %s (%s) does not exist\n", source->path.c_str(), source->from.c_str());
+    return 1;
+  }
+  if (port.empty() && profile && profile->port) port = *profile->port;
+  if (!baud) baud = profile && profile->baud ? *profile->baud : hmc::kDefaultBaud;
 
   hmc::desk::ScriptDriver script;
   const bool scripted = !script_path.empty();
@@ -139,11 +182,15 @@ int main(int argc, char** argv) {
 
   int exit_code = 0;
   {
-    hmc::desk::BoardWorker worker;
-    hmc::desk::Panel panel(worker, scripted ? &script : nullptr, port, baud);
+    const hmc::Profile* axes = profile ? &*profile : nullptr;
+    hmc::desk::BoardWorker worker(axes);
+    hmc::desk::GlfwGamepads pads;
+    hmc::desk::Panel panel(worker, scripted ? &script : nullptr, port, *baud, axes,
+                           scripted ? script.gamepad() : static_cast<hmc::desk::GamepadSource&>(pads));
+    int scripted_key = -1;  // the key code the script holds down this frame
     if (!scripted && !port.empty()) {
       hmc::desk::Request connect(hmc::desk::Request::Kind::kConnect, port);
-      connect.baud = baud;
+      connect.baud = *baud;
       worker.post(connect);
     }
     while (!glfwWindowShouldClose(window)) {
@@ -155,11 +202,22 @@ int main(int argc, char** argv) {
       }
       ImGui_ImplOpenGL3_NewFrame();
       ImGui_ImplGlfw_NewFrame();
+      if (scripted) {
+        ImGuiIO& io = ImGui::GetIO();
+        if (scripted_key >= 0) {
+          io.KeysDown[scripted_key] = false;
+          io.KeyShift = false;
+          scripted_key = -1;
+        }
+        if (auto key = script.take_key()) scripted_key = press_scripted_key(*key, io);
+      }
       ImGui::NewFrame();
       int fb_w = 0, fb_h = 0;
       glfwGetFramebufferSize(window, &fb_w, &fb_h);
       const ImVec2 size = ImGui::GetIO().DisplaySize;
-      panel.draw(size.x, size.y);
+      // Without the focus the gamepad drives nothing (the script plays the window manager's part).
+      const bool focused = scripted ? script.focused() : glfwGetWindowAttrib(window, GLFW_FOCUSED) == GLFW_TRUE;
+      panel.draw(size.x, size.y, focused);
       ImGui::Render();
       glViewport(0, 0, fb_w, fb_h);
       glClearColor(0.10f, 0.11f, 0.13f, 1.0f);
@@ -177,7 +235,7 @@ int main(int argc, char** argv) {
       glfwSwapBuffers(window);
     }
     if (scripted && !script.failures().empty()) exit_code = 1;
-  }  // the worker stops its motors and closes the port here
+  }  // the worker stops its motors (a gamepad's run included) and closes the port here
 
   ImGui_ImplOpenGL3_Shutdown();
   ImGui_ImplGlfw_Shutdown();

@@ -7,8 +7,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <optional>
+#include <utility>
 
+#include "hmc/axis_moves.h"
+#include "hmc/jog.h"
 #include "hmc/port_list.h"
+#include "hmc/units.h"
 
 namespace hmc::desk {
 namespace {
@@ -68,8 +74,30 @@ void section_title(const char* text) {
 
 }  // namespace
 
-Panel::Panel(BoardWorker& worker, ScriptDriver* script, std::string port, uint32_t baud)
-    : worker_(worker), script_(script), port_(std::move(port)), baud_(static_cast<int>(baud)) {
+Panel::Panel(BoardWorker& worker, ScriptDriver* script, std::string port, uint32_t baud, const Profile* profile,
+             GamepadSource& gamepad)
+    : worker_(worker),
+      script_(script),
+      profile_(profile),
+      gamepad_(gamepad),
+      jog_level_(kJogFirstStep),
+      port_(std::move(port)),
+      baud_(static_cast<int>(baud)) {
+  // A profile axis starts at its own speed and acceleration, in steps at its microstep.
+  for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+    const Axis* axis = profile_ != nullptr ? profile_->axis_of_motor(m) : nullptr;
+    if (axis == nullptr) continue;
+    if (axis->speed) motors_[m - 1].speed = std::clamp(static_cast<int>(std::lround(*axis->speed * axis->steps_per_unit())), 1, 50000);
+    if (axis->accel) motors_[m - 1].accel = std::clamp(static_cast<int>(std::lround(*axis->accel * axis->steps_per_unit())), 0, 1000000);
+  }
+  if (Result<std::string> path = SavedPositions::default_path(); !path) {
+    positions_where_ = path.error().message;
+  } else if (Result<SavedPositions> loaded = SavedPositions::load(*path, profile_key()); !loaded) {
+    positions_where_ = loaded.error().message;
+  } else {
+    positions_ = std::move(*loaded);
+    positions_where_ = *path;
+  }
   strips_[0].rgb[0] = 1.0f;
   strips_[0].rgb[1] = 0.55f;
   strips_[1].rgb[2] = 1.0f;
@@ -97,10 +125,98 @@ bool Panel::button(const char* label, float width, float height) {
   return clicked || (script_ && script_->take_click(key(label)));
 }
 
-void Panel::draw(float width, float height) {
+std::string Panel::profile_key() const {
+  if (profile_ == nullptr) return "";
+  char* real = realpath(profile_->path.c_str(), nullptr);
+  if (real == nullptr) return profile_->path;
+  std::string path(real);
+  std::free(real);
+  return path;
+}
+
+Axis Panel::axis_of(uint32_t m, bool* described) const {
+  return BoardWorker::axis_of(profile_, m, snap_.model.motor(m).microstep, described);
+}
+
+Request Panel::motor_request(Request::Kind kind, uint32_t m) const {
+  Request r(kind);
+  r.unit = m;
+  r.rate = static_cast<uint32_t>(std::max(1, motors_[m - 1].speed));
+  r.accel = static_cast<uint32_t>(std::max(0, motors_[m - 1].accel));
+  return r;
+}
+
+void Panel::stop_all() {
+  worker_.stop_all();
+  stick_.halt();
+}
+
+void Panel::keyboard_jog() {
+  const ImGuiIO& io = ImGui::GetIO();
+  if (io.WantTextInput) return;  // the keys are the text field's
+  std::vector<JogKey> keys;
+  static const std::pair<ImGuiKey_, JogArrow> kArrows[] = {
+      {ImGuiKey_RightArrow, JogArrow::kRight}, {ImGuiKey_LeftArrow, JogArrow::kLeft}, {ImGuiKey_UpArrow, JogArrow::kUp},
+      {ImGuiKey_DownArrow, JogArrow::kDown},   {ImGuiKey_PageUp, JogArrow::kPageUp},  {ImGuiKey_PageDown, JogArrow::kPageDown}};
+  for (const auto& [key, arrow] : kArrows) {
+    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(key), true)) keys.push_back(jog_arrow_key(arrow, io.KeyShift));
+  }
+  for (const ImWchar c : io.InputQueueCharacters) {
+    if (c >= 0x80) continue;
+    if (const std::optional<JogKey> key = jog_char_key(static_cast<char>(c))) keys.push_back(*key);
+  }
+  for (const JogKey& key : keys) {
+    switch (key.kind) {
+      case JogKey::Kind::kMove: {
+        if (!connected()) break;
+        jog_axis_ = key.axis;
+        Request r = motor_request(Request::Kind::kJog, static_cast<uint32_t>(key.axis) + 1);
+        r.dir = key.dir;
+        r.fast = key.fast;
+        r.level = jog_level_;
+        worker_.post(r);
+        break;
+      }
+      case JogKey::Kind::kStepUp: jog_level_ = std::min(jog_level_ + 1, kJogProfileSteps.size() - 1); break;
+      case JogKey::Kind::kStepDown: jog_level_ = jog_level_ == 0 ? 0 : jog_level_ - 1; break;
+      case JogKey::Kind::kStopAll: stop_all(); break;
+      case JogKey::Kind::kZero:
+        if (connected()) worker_.post(motor_request(Request::Kind::kZero, static_cast<uint32_t>(jog_axis_) + 1));
+        break;
+      default: break;  // q and Ctrl-C end `hmc jog`; the window closes as windows do
+    }
+  }
+}
+
+void Panel::gamepad_jog(bool focused) {
+  const GamepadState state = gamepad_.read();
+  pad_present_ = state.present;
+  const bool trusted = focused && connected() && !snap_.running;
+  for (const StickCommand& c : stick_.update(state, trusted)) {
+    const uint32_t m = static_cast<uint32_t>(c.axis) + 1;
+    switch (c.kind) {
+      case StickCommand::Kind::kStopAll: worker_.stop_all(); break;
+      case StickCommand::Kind::kStop:
+        if (connected()) worker_.post(motor_request(Request::Kind::kStop, m));
+        break;
+      case StickCommand::Kind::kRun: {
+        Request r = motor_request(Request::Kind::kStickRun, m);
+        r.reverse = c.fraction < 0;
+        r.rate = static_cast<uint32_t>(std::max(1L, std::lround(std::fabs(c.fraction) * r.rate)));
+        worker_.post(r);
+        break;
+      }
+    }
+  }
+  if (stick_.running()) worker_.stick_heartbeat();
+}
+
+void Panel::draw(float width, float height, bool focused) {
   snap_ = worker_.snapshot();
   // Escape is STOP ALL wherever the focus is.
-  if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) worker_.stop_all();
+  if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) stop_all();
+  keyboard_jog();
+  gamepad_jog(focused);
 
   ImGui::SetNextWindowPos(ImVec2{0, 0});
   ImGui::SetNextWindowSize(ImVec2{width, height});
@@ -114,7 +230,7 @@ void Panel::draw(float width, float height) {
   const float content_h = ImGui::GetContentRegionAvail().y;
   const float right_w = 390.0f;
   const float left_w = content_w - right_w - kPad;
-  const float motors_h = 318.0f;
+  const float motors_h = 392.0f;
 
   ImGui::BeginGroup();
   const float motor_w = (left_w - 2 * kPad) / 3.0f;
@@ -134,8 +250,10 @@ void Panel::draw(float width, float height) {
 
   ImGui::SameLine(0, kPad);
   ImGui::BeginGroup();
-  file_panel(right_w, 330.0f);
-  log_panel(right_w, content_h - 330.0f - kPad);
+  const float file_h = 280.0f, positions_h = 190.0f;
+  file_panel(right_w, file_h);
+  positions_panel(right_w, positions_h);
+  log_panel(right_w, content_h - file_h - positions_h - 2 * kPad);
   ImGui::EndGroup();
   ImGui::End();
 }
@@ -209,7 +327,7 @@ void Panel::top_bar(float width) {
   ImGui::PushStyleColor(ImGuiCol_Text, ImVec4{1, 1, 1, 1});
   const float y = ImGui::GetCursorPosY();
   ImGui::SetCursorPosY(y - 4);
-  if (button("STOP ALL", stop_w, ImGui::GetFrameHeight() + 8)) worker_.stop_all();
+  if (button("STOP ALL", stop_w, ImGui::GetFrameHeight() + 8)) stop_all();
   ImGui::PopStyleColor(4);
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Stops every motor now (Escape)");
   if (connected() && !snap_.description.empty()) {
@@ -227,8 +345,15 @@ void Panel::motor_panel(uint32_t m, float width, float height) {
   ImGui::BeginChild(group_.c_str(), ImVec2{width, height}, true);
   ImGui::PushID(static_cast<int>(m));
 
+  bool described = false;
+  const Axis axis = axis_of(m, &described);
+  const std::string unit = unit_name(axis.unit());
   ImGui::PushStyleColor(ImGuiCol_Text, kBlue);
-  ImGui::Text("Motor %u", m);
+  if (described) {
+    ImGui::Text("Motor %u \xc2\xb7 %s", m, axis.name.c_str());
+  } else {
+    ImGui::Text("Motor %u", m);
+  }
   ImGui::PopStyleColor();
   ImGui::SameLine();
   const bool moving = status.state != MotorState::kIdle;
@@ -236,20 +361,35 @@ void Panel::motor_panel(uint32_t m, float width, float height) {
   indicator(moving, status.state == MotorState::kHoming ? kAmber : kGreen, connected() ? state_name(status.state) : "-");
   ImGui::Separator();
 
-  // Positions arrive in 1/256 step; shown at the motor's microstep and as the shaft's angle.
+  // Positions arrive in 1/256 step. A profile axis shows its own units first (mm, deg), the
+  // steps beside; a bare motor its steps at its microstep and the shaft's angle.
   const double full_steps = static_cast<double>(status.position) / 256.0;
   const double steps = full_steps * status.microstep;
-  const double degrees = full_steps / kFullStepsPerRev * 360.0;
   ImGui::SetWindowFontScale(1.45f);
-  ImGui::Text("%.0f", steps);
+  if (described) {
+    ImGui::Text("%s %s", number_text(axis.from_board_position(status.position)).c_str(), unit.c_str());
+  } else {
+    ImGui::Text("%.0f", steps);
+  }
   ImGui::SetWindowFontScale(1.0f);
   ImGui::SameLine();
   ImGui::AlignTextToFramePadding();
-  ImGui::TextDisabled("steps (1/%u)", status.microstep);
-  ImGui::Text("%.2f\xc2\xb0", degrees);
+  if (described) {
+    ImGui::TextDisabled("%.0f steps (1/%u)", steps, status.microstep);
+    ImGui::Text("%s %s/s", number_text(axis.from_board_rate(status.rate, status.microstep)).c_str(), unit.c_str());
+  } else {
+    ImGui::TextDisabled("steps (1/%u)", status.microstep);
+    ImGui::Text("%.2f\xc2\xb0", full_steps / kFullStepsPerRev * 360.0);
+  }
   ImGui::SameLine();
   ImGui::TextDisabled("| %u steps/s | %s%s", status.rate, status.homed ? "homed" : "not homed",
                       status.endless ? " | run" : "");
+  if (described && axis.limit_min) {
+    ImGui::TextDisabled("soft limits %s to %s %s%s", number_text(*axis.limit_min).c_str(), number_text(*axis.limit_max).c_str(),
+                        unit.c_str(), status.homed ? "" : " (once homed or zeroed)");
+  } else {
+    ImGui::TextDisabled("%s", described ? "no soft limits" : "no profile axis: steps");
+  }
 
   ImGui::Spacing();
   ImGui::BeginDisabled(!connected());
@@ -262,11 +402,8 @@ void Panel::motor_panel(uint32_t m, float width, float height) {
     char label[16];
     std::snprintf(label, sizeof label, "%+d", kJogs[i]);
     if (button(label, jog_w)) {
-      Request r(Request::Kind::kMove);
-      r.unit = m;
+      Request r = motor_request(Request::Kind::kMove, m);
       r.steps = kJogs[i];
-      r.rate = static_cast<uint32_t>(std::max(1, in.speed));
-      r.accel = static_cast<uint32_t>(std::max(0, in.accel));
       worker_.post(r);
     }
   }
@@ -280,11 +417,8 @@ void Panel::motor_panel(uint32_t m, float width, float height) {
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("Runs while held, stops when let go");
     const bool held = connected() && (ImGui::IsItemActive() || (script_ && script_->held(key(label))));
     if (held && !in.holding[d]) {
-      Request r(Request::Kind::kRun);
-      r.unit = m;
+      Request r = motor_request(Request::Kind::kRun, m);
       r.reverse = d == 0;
-      r.rate = static_cast<uint32_t>(std::max(1, in.speed));
-      r.accel = static_cast<uint32_t>(std::max(0, in.accel));
       worker_.post(r);
     } else if (!held && in.holding[d]) {
       Request r(Request::Kind::kStop);
@@ -325,13 +459,29 @@ void Panel::motor_panel(uint32_t m, float width, float height) {
   ImGui::SameLine();
   ImGui::BeginDisabled(!connected());
   if (button("Move", -1)) {
-    Request r(Request::Kind::kMove);
-    r.unit = m;
+    Request r = motor_request(Request::Kind::kMove, m);
     r.steps = in.steps;
-    r.rate = static_cast<uint32_t>(std::max(1, in.speed));
-    r.accel = static_cast<uint32_t>(std::max(0, in.accel));
     worker_.post(r);
   }
+  ImGui::EndDisabled();
+  // An absolute target in the axis's units (a bare number), or any unit it takes ("2rev").
+  if (script_) {
+    if (auto text = script_->take_text(key("go to"))) in.go_to = *text;
+  }
+  ImGui::AlignTextToFramePadding();
+  ImGui::TextUnformatted("Go to");
+  ImGui::SameLine(label_w);
+  ImGui::SetNextItemWidth(ImGui::GetContentRegionAvail().x - 70);
+  ImGui::InputTextWithHint("##go to", described ? unit.c_str() : "steps", &in.go_to);
+  ImGui::SameLine();
+  ImGui::BeginDisabled(!connected() || in.go_to.empty());
+  if (button("Go", -1)) {
+    Request r = motor_request(Request::Kind::kGoTo, m);
+    r.text = in.go_to;
+    worker_.post(r);
+  }
+  ImGui::EndDisabled();
+  ImGui::BeginDisabled(!connected());
 
   ImGui::Spacing();
   const bool has_home = m <= 2;
@@ -344,11 +494,9 @@ void Panel::motor_panel(uint32_t m, float width, float height) {
     }
     ImGui::SameLine();
   }
-  if (button("Stop", has_home ? half : -1)) {
-    Request r(Request::Kind::kStop);
-    r.unit = m;
-    worker_.post(r);
-  }
+  if (button("Stop", has_home ? half : -1)) worker_.post(motor_request(Request::Kind::kStop, m));
+  if (button("Set zero here", -1)) worker_.post(motor_request(Request::Kind::kZero, m));
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("This position becomes 0 (protocol 6); the profile's soft limits apply from now");
   ImGui::EndDisabled();
   ImGui::PopID();
   ImGui::EndChild();
@@ -534,6 +682,91 @@ void Panel::file_panel(float width, float height) {
   ImGui::BeginDisabled(!snap_.running);
   if (button("Stop run", -1)) worker_.stop_run();
   ImGui::EndDisabled();
+  ImGui::EndChild();
+  group_.clear();
+}
+
+void Panel::positions_panel(float width, float height) {
+  group_ = "positions";
+  ImGui::BeginChild("positions", ImVec2{width, height}, true);
+  section_title("Jog and saved positions");
+  // The keys, as `hmc jog` has them, with the step now.
+  bool described = false;
+  const Axis last = axis_of(static_cast<uint32_t>(jog_axis_) + 1, &described);
+  const std::string step = described ? number_text(kJogProfileSteps[jog_level_]) + " " + unit_name(last.unit())
+                                     : number_text(kJogMotorSteps[jog_level_]) + " steps";
+  ImGui::TextDisabled("keys: \xe2\x86\x90\xe2\x86\x92 \xe2\x86\x91\xe2\x86\x93 PgUp/PgDn, Shift x10, +/- step %s, space stop, z zero %s",
+                      step.c_str(), last.name.c_str());
+  ImGui::TextDisabled("gamepad: %s", pad_present_ ? (stick_.running() ? "running" : "ready (sticks jog, B stops all)") : "none");
+
+  if (!positions_) {
+    ImGui::TextWrapped("positions cannot be saved: %s", positions_where_.c_str());
+    ImGui::EndChild();
+    group_.clear();
+    return;
+  }
+  if (script_) {
+    if (auto text = script_->take_text(key("name"))) position_name_ = *text;
+  }
+  ImGui::SetNextItemWidth(ImGui::GetContentRegionAvail().x - 110);
+  ImGui::InputTextWithHint("##name", "name this position", &position_name_);
+  ImGui::SameLine();
+  ImGui::BeginDisabled(!connected() || position_name_.empty());
+  if (button("Save here", -1)) {
+    // Every axis where it is now, in its own units (bare motors in steps).
+    SavedPosition saved{position_name_, {}};
+    for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+      bool is_axis = false;
+      const Axis axis = axis_of(m, &is_axis);
+      const int64_t position = snap_.model.motor(m).position;
+      saved.axes[axis.name] = is_axis ? axis.from_board_position(position)
+                                      : static_cast<double>(position) * snap_.model.motor(m).microstep / 256.0;
+    }
+    positions_->put(std::move(saved));
+    if (Status written = positions_->save(); !written) positions_where_ = written.error().message;
+  }
+  ImGui::EndDisabled();
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Saved in %s", positions_where_.c_str());
+
+  ImGui::BeginChild("list", ImVec2{-1, -1}, false);
+  std::optional<std::string> forget;
+  for (const SavedPosition& p : positions_->list()) {
+    group_ = "positions/" + p.name;
+    ImGui::PushID(p.name.c_str());
+    std::string where;
+    for (const auto& [name, value] : p.axes) {
+      const Axis* axis = profile_ != nullptr ? profile_->find(name) : nullptr;
+      where += (where.empty() ? "" : ", ") + name + " " + number_text(value) + " " +
+               (axis != nullptr ? unit_name(axis->unit()) : "steps");
+    }
+    ImGui::BeginDisabled(!connected());
+    if (button("Go to", 60)) {
+      // Absolute targets, each in the unit it was saved in: rounding never adds up.
+      for (const auto& [name, value] : p.axes) {
+        const Axis* axis = profile_ != nullptr ? profile_->find(name) : nullptr;
+        uint32_t m = axis != nullptr ? axis->motor : 0;
+        if (axis == nullptr && name.rfind("motor ", 0) == 0) m = static_cast<uint32_t>(std::atoi(name.c_str() + 6));
+        if (m < 1 || m > proto::kMotorCount) continue;  // an axis this profile does not have
+        Request r = motor_request(Request::Kind::kGoTo, m);
+        r.text = number_text(value, 6) + (axis != nullptr ? unit_name(axis->unit()) : "steps");
+        worker_.post(r);
+      }
+    }
+    ImGui::EndDisabled();
+    ImGui::SameLine();
+    if (button("Forget", 60)) forget = p.name;
+    ImGui::SameLine();
+    ImGui::Text("%s", p.name.c_str());
+    ImGui::SameLine();
+    ImGui::TextDisabled("%s", where.c_str());
+    ImGui::PopID();
+  }
+  ImGui::EndChild();
+  group_ = "positions";
+  if (forget) {
+    positions_->remove(*forget);
+    if (Status written = positions_->save(); !written) positions_where_ = written.error().message;
+  }
   ImGui::EndChild();
   group_.clear();
 }

@@ -1,10 +1,12 @@
 // ScriptDriver: parses the test script and steps it frame by frame (see script.h).
 #include "script.h"
 
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 namespace hmc::desk {
 namespace {
@@ -47,7 +49,8 @@ bool ScriptDriver::load(const std::string& path, std::string& error) {
   }
   static const std::set<std::string> known{"connect", "disconnect", "wait", "wait-for", "click", "press", "hold",
                                            "release", "set", "jog", "move", "led", "servo", "open", "run",
-                                           "screenshot", "quit"};
+                                           "screenshot", "quit", "text", "key", "stick", "button", "gamepad",
+                                           "focus", "hang"};
   std::string text;
   int line_number = 0;
   while (std::getline(in, text)) {
@@ -175,6 +178,51 @@ bool ScriptDriver::run(const Line& line, double now_s, const Snapshot& snapshot)
     }
     return false;
   }
+  if (op == "text") {
+    if (frames_ == 0) texts_[arg(1)] = arg(2);
+    return frames_ > 1;
+  }
+  if (op == "key") {
+    // Pressed in one frame, let go in the next, and one frame more so that the same key again is
+    // a new press.
+    if (frames_ == 0) key_ = arg(1);
+    return frames_ > 2 && !key_;
+  }
+  if (op == "stick" || op == "button" || op == "gamepad") {
+    if (frames_ > 0) return frames_ > 1;  // one frame for the panel to read it
+    GamepadState& pad = pad_.state();
+    pad.present = op != "gamepad" || arg(1) != "absent";
+    if (op == "stick") {
+      static const std::map<std::string, size_t> kSticks{{"LX", GamepadState::kLeftX}, {"LY", GamepadState::kLeftY},
+                                                         {"RX", GamepadState::kRightX}, {"RY", GamepadState::kRightY}};
+      double value = 0;
+      if (kSticks.count(arg(1)) == 0 || !number(arg(2), value)) {
+        fail("stick takes LX, LY, RX or RY and a value -1..1");
+      } else {
+        pad.axes[kSticks.at(arg(1))] = static_cast<float>(value);
+      }
+    } else if (op == "button") {
+      if ((arg(1) != "A" && arg(1) != "B") || (arg(2) != "down" && arg(2) != "up")) {
+        fail("button takes A or B, then down or up");
+      } else {
+        pad.buttons[arg(1) == "A" ? GamepadState::kA : GamepadState::kB] = arg(2) == "down";
+      }
+    }
+    return false;
+  }
+  if (op == "hang") {
+    // The panel stops drawing (as when a window is dragged on some systems): nothing reads the
+    // pad or says the worker may go on.
+    double ms = 0;
+    if (!number(arg(1), ms)) fail("hang takes milliseconds");
+    std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(ms));
+    return true;
+  }
+  if (op == "focus") {
+    if (arg(1) != "lost" && arg(1) != "back") fail("focus takes lost or back");
+    focused_ = arg(1) == "back";
+    return frames_ > 1;
+  }
   if (op == "screenshot") {
     if (frames_ == 0) {
       screenshot_ = arg(1).empty() ? std::string("screenshot") : arg(1);
@@ -209,6 +257,12 @@ std::optional<std::string> ScriptDriver::take_text(const std::string& key) {
   std::string text = std::move(it->second);
   texts_.erase(it);
   return text;
+}
+
+std::optional<std::string> ScriptDriver::take_key() {
+  std::optional<std::string> name = std::move(key_);
+  key_.reset();
+  return name;
 }
 
 std::optional<std::string> ScriptDriver::take_screenshot() {

@@ -17,6 +17,14 @@
 //   led S R G B W                     set strip S's colour and click Apply
 //   servo S ANGLE                     set servo S's slider
 //   open PATH    run                  open a motion file / run it
+//   text "KEY" TEXT                   put TEXT into a text field: text "motor 1/go to" 250mm
+//   key NAME                          a key pressed and let go: Right, Left, Up, Down, PageUp,
+//                                     PageDown (shift+Right ...), or a character: + - z space
+//   stick LX|LY|RX|RY VALUE           the scripted gamepad's stick (-1..1; Y down positive, as GLFW)
+//   button A|B down|up                its buttons
+//   gamepad absent                    unplugs it (a stick or button line plugs it in)
+//   focus lost|back                   the window loses / gets back the keyboard focus
+//   hang MS                           the panel draws nothing for MS milliseconds (a stuck window)
 //   screenshot NAME                   NAME.png in the screenshot directory
 //   quit
 #pragma once
@@ -29,6 +37,7 @@
 #include <vector>
 
 #include "board_worker.h"
+#include "gamepad.h"
 
 namespace hmc::desk {
 
@@ -45,6 +54,10 @@ class ScriptDriver {
   // The panel, drawing an input `key`: the values the script puts into it, once.
   std::optional<std::vector<double>> take_values(const std::string& key);
   std::optional<std::string> take_text(const std::string& key);
+  // Before the frame: a key to press now ("Right", "shift+PageUp", "+"), once.
+  std::optional<std::string> take_key();
+  GamepadSource& gamepad() { return pad_; }
+  bool focused() const { return focused_; }
   // After the frame is drawn: the name of a screenshot to take now, once.
   std::optional<std::string> take_screenshot();
 
@@ -70,6 +83,9 @@ class ScriptDriver {
   int frames_ = 0;
   std::optional<std::string> click_;
   std::optional<std::string> screenshot_;
+  std::optional<std::string> key_;
+  ScriptedGamepad pad_;
+  bool focused_ = true;
   std::set<std::string> held_;
   std::map<std::string, std::vector<double>> values_;
   std::map<std::string, std::string> texts_;

@@ -161,4 +161,9 @@ std::optional<std::string> beyond_soft_limits(const Axis& axis, const MotorStatu
          number_text(*axis.limit_min) + " to " + number_text(*axis.limit_max) + " " + u + " (the profile's)";
 }
 
+SetPosition set_position_command(const Axis& axis, double axis_position) {
+  const int64_t board = axis.to_board_position(axis_position).steps;
+  return SetPosition{axis.motor, board < 0 ? 1u : 0u, static_cast<uint32_t>(std::llabs(board))};
+}
+
 }  // namespace hmc

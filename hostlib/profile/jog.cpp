@@ -8,23 +8,39 @@
 
 namespace hmc {
 
+JogKey jog_arrow_key(JogArrow arrow, bool shift) {
+  const auto move = [shift](size_t axis, int dir) { return JogKey{JogKey::Kind::kMove, axis, dir, shift}; };
+  switch (arrow) {
+    case JogArrow::kRight: return move(0, +1);
+    case JogArrow::kLeft: return move(0, -1);
+    case JogArrow::kUp: return move(1, +1);
+    case JogArrow::kDown: return move(1, -1);
+    case JogArrow::kPageUp: return move(2, +1);
+    case JogArrow::kPageDown: return move(2, -1);
+  }
+  return move(0, +1);
+}
+
+std::optional<JogKey> jog_char_key(char c) {
+  switch (c) {
+    case '+': case '=': return JogKey{JogKey::Kind::kStepUp};
+    case '-': case '_': return JogKey{JogKey::Kind::kStepDown};
+    case ' ': return JogKey{JogKey::Kind::kStopAll};
+    case 'z': case 'Z': return JogKey{JogKey::Kind::kZero};
+    case 'q': case 'Q': return JogKey{JogKey::Kind::kQuit};
+    case '\x03': return JogKey{JogKey::Kind::kInterrupt};  // Ctrl-C with the terminal's signals off
+    default: return std::nullopt;
+  }
+}
+
 std::vector<JogKey> decode_jog_keys(std::string& bytes) {
   std::vector<JogKey> keys;
-  const auto move = [&keys](size_t axis, int dir, bool fast) { keys.push_back({JogKey::Kind::kMove, axis, dir, fast}); };
   size_t i = 0;
   while (i < bytes.size()) {
     const char c = bytes[i];
     if (c != '\x1b') {
       ++i;
-      switch (c) {
-        case '+': case '=': keys.push_back({JogKey::Kind::kStepUp}); break;
-        case '-': case '_': keys.push_back({JogKey::Kind::kStepDown}); break;
-        case ' ': keys.push_back({JogKey::Kind::kStopAll}); break;
-        case 'z': case 'Z': keys.push_back({JogKey::Kind::kZero}); break;
-        case 'q': case 'Q': keys.push_back({JogKey::Kind::kQuit}); break;
-        case '\x03': keys.push_back({JogKey::Kind::kInterrupt}); break;  // Ctrl-C with the terminal's signals off
-        default: break;
-      }
+      if (const std::optional<JogKey> key = jog_char_key(c)) keys.push_back(*key);
       continue;
     }
     // ESC: a control sequence's introducer, its parameters (digits and ';'), then its final byte.
@@ -45,13 +61,13 @@ std::vector<JogKey> decode_jog_keys(std::string& bytes) {
     const bool shift = modifier >= 2 && ((modifier - 1) & 1) != 0;
     const std::string first = params.substr(0, semicolon);
     switch (final_byte) {
-      case 'C': move(0, +1, shift); break;
-      case 'D': move(0, -1, shift); break;
-      case 'A': move(1, +1, shift); break;
-      case 'B': move(1, -1, shift); break;
+      case 'C': keys.push_back(jog_arrow_key(JogArrow::kRight, shift)); break;
+      case 'D': keys.push_back(jog_arrow_key(JogArrow::kLeft, shift)); break;
+      case 'A': keys.push_back(jog_arrow_key(JogArrow::kUp, shift)); break;
+      case 'B': keys.push_back(jog_arrow_key(JogArrow::kDown, shift)); break;
       case '~':
-        if (first == "5") move(2, +1, shift);
-        if (first == "6") move(2, -1, shift);
+        if (first == "5") keys.push_back(jog_arrow_key(JogArrow::kPageUp, shift));
+        if (first == "6") keys.push_back(jog_arrow_key(JogArrow::kPageDown, shift));
         break;
       default: break;
     }

@@ -43,6 +43,17 @@ TEST_CASE("a sequence split between two reads is decoded once whole") {
   CHECK(bytes == "\x1b");
 }
 
+TEST_CASE("a window's named keys mean what the terminal's bytes mean") {
+  std::string right = "\x1b[C", shift_page_down = "\x1b[6;2~";
+  CHECK(jog_arrow_key(JogArrow::kRight, false) == decode_jog_keys(right).at(0));
+  CHECK(jog_arrow_key(JogArrow::kPageDown, true) == decode_jog_keys(shift_page_down).at(0));
+  CHECK(jog_arrow_key(JogArrow::kUp, false) == JogKey{JogKey::Kind::kMove, 1, +1, false});
+  CHECK(jog_char_key('+')->kind == JogKey::Kind::kStepUp);
+  CHECK(jog_char_key(' ')->kind == JogKey::Kind::kStopAll);
+  CHECK(jog_char_key('z')->kind == JogKey::Kind::kZero);
+  CHECK_FALSE(jog_char_key('x'));
+}
+
 TEST_CASE("a jog stops at the soft limit it would cross, once the limits apply") {
   Axis slide;
   slide.name = "slide";

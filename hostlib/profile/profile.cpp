@@ -9,6 +9,7 @@
 #include <map>
 #include <sstream>
 
+#include <sys/stat.h>
 #include <toml++/toml.h>
 
 #include "hmc/command.h"
@@ -454,6 +455,20 @@ Result<std::string> default_profile_path() {
   const char* home = std::getenv("HOME");
   if (home == nullptr || home[0] == '\0') return Error{"neither XDG_CONFIG_HOME nor HOME is set: name the profile with --profile"};
   return std::string(home) + "/.config/hmc/config.toml";
+}
+
+Result<ProfileSource> find_profile(const std::string& given) {
+  const auto exists = [](const std::string& path) {
+    struct stat info {};
+    return stat(path.c_str(), &info) == 0;
+  };
+  if (!given.empty()) return ProfileSource{given, "--profile", exists(given)};
+  if (const char* env = std::getenv("HMC_PROFILE"); env != nullptr && env[0] != '\0') {
+    return ProfileSource{env, "HMC_PROFILE", exists(env)};
+  }
+  Result<std::string> path = default_profile_path();
+  if (!path) return path.error();
+  return ProfileSource{*path, "default", exists(*path)};
 }
 
 }  // namespace hmc

@@ -75,4 +75,8 @@ HomingSetup homing_setup(const Axis& axis, StepperMove move);
 // that its position is wherever it stood at power-up (grbl enforces limits only then too).
 std::optional<SoftLimits> soft_limits_command(const Axis& axis);
 
+// The board's POS that makes a resting motor's position `axis_position` (axis units) from now on:
+// 0 zeroes it here. One conversion for `hmc zero`, `hmc jog`'s z and hmc-desk's "set zero here".
+SetPosition set_position_command(const Axis& axis, double axis_position);
+
 }  // namespace hmc

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -30,6 +31,13 @@ inline constexpr double kJogShiftFactor = 10;
 inline constexpr std::array<double, 3> kJogProfileSteps{0.1, 1, 10};
 inline constexpr std::array<double, 3> kJogMotorSteps{1, 10, 100};
 inline constexpr size_t kJogFirstStep = 1;  // the middle size
+
+// The keys a window names instead of spelling them in bytes (hmc-desk), and what each asks for:
+// Right/Left the first axis, Up/Down the second, Page Up/Down the third; Shift: fast.
+enum class JogArrow : uint8_t { kRight, kLeft, kUp, kDown, kPageUp, kPageDown };
+JogKey jog_arrow_key(JogArrow arrow, bool shift);
+// A typed character's key: + and = step up, - and _ down, space stop all, z zero, q quit, Ctrl-C.
+std::optional<JogKey> jog_char_key(char c);
 
 // The keys in `bytes`, in order. The bytes of a sequence not complete yet stay in `bytes` for the
 // next read; other keys and sequences are dropped. Arrows are ESC [ A..D (ESC O A..D in the

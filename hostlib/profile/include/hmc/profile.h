@@ -113,4 +113,13 @@ Result<Profile, ProfileError> load_profile(const std::string& path);
 // The default profile's path: $XDG_CONFIG_HOME/hmc/config.toml, else ~/.config/hmc/config.toml.
 Result<std::string> default_profile_path();
 
+// Which profile a program uses: the one it was given (`--profile`, may be empty), else
+// HMC_PROFILE, else the default path. One rule for every program (the CLI, hmc-desk).
+struct ProfileSource {
+  std::string path;
+  std::string from;  // "--profile", "HMC_PROFILE" or "default"
+  bool exists = false;
+};
+Result<ProfileSource> find_profile(const std::string& given);
+
 }  // namespace hmc
