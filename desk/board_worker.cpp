@@ -54,6 +54,16 @@ BoardWorker::~BoardWorker() {
 void BoardWorker::post(Request request) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
+    // A held key repeats faster than a jog stops and starts again: jogs still waiting in the
+    // queue are added up, so that letting go of the key leaves at most one jog to carry out.
+    if (request.kind == Request::Kind::kJog && !queue_.empty()) {
+      Request& last = queue_.back();
+      if (last.kind == Request::Kind::kJog && last.unit == request.unit && last.dir == request.dir &&
+          last.fast == request.fast && last.level == request.level) {
+        ++last.count;
+        return;
+      }
+    }
     queue_.push_back(std::move(request));
     snap_.busy = true;
   }
@@ -401,7 +411,8 @@ bool BoardWorker::stop_if_moving(uint32_t m) {
 }
 
 bool BoardWorker::move_to(uint32_t m, double target, const Request& q) {
-  const Axis axis = axis_of(profile_, m, session_->model().motor(m).microstep);
+  bool described = false;
+  const Axis axis = axis_of(profile_, m, session_->model().motor(m).microstep, &described);
   const std::string unit = unit_name(axis.unit());
   Result<UnitMove> planned = unit_move(axis, session_->model().motor(m),
                                        UnitMoveRequest{number_text(target, 6) + unit, std::nullopt, std::nullopt, std::nullopt});
@@ -415,8 +426,8 @@ bool BoardWorker::move_to(uint32_t m, double target, const Request& q) {
   // The profile's speed and acceleration when it gives them, else the motor panel's.
   move.delay_us = planned->delay_us ? *planned->delay_us : delay_of(q.rate);
   if (!set_accel(m, planned->accel ? *planned->accel : q.accel)) return false;
-  const std::string what = axis.name + ": to " + number_text(target) + " " + unit + " (" +
-                           std::to_string(planned->target_position * axis.microstep / 256) + " steps)";
+  const std::string steps = std::to_string(planned->target_position * axis.microstep / 256) + " steps";
+  const std::string what = axis.name + ": to " + (described ? number_text(target) + " " + unit + " (" + steps + ")" : steps);
   log(LogLine::Kind::kInfo, what);
   SessionResult<BoardFrame> reply = session_->execute(move);
   if (!reply) {
@@ -436,7 +447,7 @@ void BoardWorker::jog(const Request& q) {
   const double step = described ? kJogProfileSteps[level] : kJogMotorSteps[level] / axis.steps_per_unit();
   // A key while the jog still runs adds to where that jog ends, as `hmc jog` does.
   const double from = moving && jog_target_[m - 1] ? *jog_target_[m - 1] : axis.from_board_position(motor.position);
-  const JogEnd end = jog_end(axis, motor, from, q.dir * step * (q.fast ? kJogShiftFactor : 1));
+  const JogEnd end = jog_end(axis, motor, from, q.dir * q.count * step * (q.fast ? kJogShiftFactor : 1));
   if (end.at_limit) {
     log(LogLine::Kind::kInfo, axis.name + " stops at its soft limit " + number_text(end.target) + " " + unit_name(axis.unit()));
   }

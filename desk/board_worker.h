@@ -82,6 +82,7 @@ struct Request {
   int dir = 1;           // jog: +1 or -1, in the axis's sense
   bool fast = false;     // jog: Shift held
   size_t level = 1;      // jog: the step size's index
+  int count = 1;         // jog: how many such steps (a held key's repeats, added up in the queue)
 };
 
 class BoardWorker {

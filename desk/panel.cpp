@@ -230,7 +230,7 @@ void Panel::draw(float width, float height, bool focused) {
   const float content_h = ImGui::GetContentRegionAvail().y;
   const float right_w = 390.0f;
   const float left_w = content_w - right_w - kPad;
-  const float motors_h = 392.0f;
+  const float motors_h = 384.0f;
 
   ImGui::BeginGroup();
   const float motor_w = (left_w - 2 * kPad) / 3.0f;
@@ -250,7 +250,7 @@ void Panel::draw(float width, float height, bool focused) {
 
   ImGui::SameLine(0, kPad);
   ImGui::BeginGroup();
-  const float file_h = 280.0f, positions_h = 190.0f;
+  const float file_h = 270.0f, positions_h = 210.0f;
   file_panel(right_w, file_h);
   positions_panel(right_w, positions_h);
   log_panel(right_w, content_h - file_h - positions_h - 2 * kPad);
@@ -483,18 +483,17 @@ void Panel::motor_panel(uint32_t m, float width, float height) {
   ImGui::EndDisabled();
   ImGui::BeginDisabled(!connected());
 
-  ImGui::Spacing();
+  // Home (motors 1 and 2, which have switches), Stop and Set zero here on one row.
   const bool has_home = m <= 2;
-  const float bw = has_home ? half : -1;
+  const float gap = ImGui::GetStyle().ItemSpacing.x;
+  const float row_w = ImGui::GetContentRegionAvail().x;
+  const float small_w = has_home ? (row_w - 2 * gap) * 0.28f : (row_w - gap) * 0.4f;
   if (has_home) {
-    if (button("Home", bw)) {
-      Request r(Request::Kind::kHome);
-      r.unit = m;
-      worker_.post(r);
-    }
+    if (button("Home", small_w)) worker_.post(motor_request(Request::Kind::kHome, m));
     ImGui::SameLine();
   }
-  if (button("Stop", has_home ? half : -1)) worker_.post(motor_request(Request::Kind::kStop, m));
+  if (button("Stop", small_w)) worker_.post(motor_request(Request::Kind::kStop, m));
+  ImGui::SameLine();
   if (button("Set zero here", -1)) worker_.post(motor_request(Request::Kind::kZero, m));
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("This position becomes 0 (protocol 6); the profile's soft limits apply from now");
   ImGui::EndDisabled();
@@ -695,9 +694,9 @@ void Panel::positions_panel(float width, float height) {
   const Axis last = axis_of(static_cast<uint32_t>(jog_axis_) + 1, &described);
   const std::string step = described ? number_text(kJogProfileSteps[jog_level_]) + " " + unit_name(last.unit())
                                      : number_text(kJogMotorSteps[jog_level_]) + " steps";
-  ImGui::TextDisabled("keys: \xe2\x86\x90\xe2\x86\x92 \xe2\x86\x91\xe2\x86\x93 PgUp/PgDn, Shift x10, +/- step %s, space stop, z zero %s",
-                      step.c_str(), last.name.c_str());
-  ImGui::TextDisabled("gamepad: %s", pad_present_ ? (stick_.running() ? "running" : "ready (sticks jog, B stops all)") : "none");
+  ImGui::TextDisabled("keys \xe2\x86\x90\xe2\x86\x92\xe2\x86\x91\xe2\x86\x93 PgUp/Dn jog, Shift x10, step %s (+/-)", step.c_str());
+  ImGui::TextDisabled("space stops all, z zeroes %s", last.name.c_str());
+  ImGui::TextDisabled("gamepad: %s", pad_present_ ? (stick_.running() ? "running" : "sticks jog, B stops all") : "none");
 
   if (!positions_) {
     ImGui::TextWrapped("positions cannot be saved: %s", positions_where_.c_str());
@@ -733,11 +732,14 @@ void Panel::positions_panel(float width, float height) {
   for (const SavedPosition& p : positions_->list()) {
     group_ = "positions/" + p.name;
     ImGui::PushID(p.name.c_str());
-    std::string where;
-    for (const auto& [name, value] : p.axes) {
-      const Axis* axis = profile_ != nullptr ? profile_->find(name) : nullptr;
-      where += (where.empty() ? "" : ", ") + name + " " + number_text(value) + " " +
-               (axis != nullptr ? unit_name(axis->unit()) : "steps");
+    std::string where;  // motor 1's axis first
+    for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
+      bool is_axis = false;
+      const Axis axis = axis_of(m, &is_axis);
+      const auto value = p.axes.find(axis.name);
+      if (value == p.axes.end()) continue;
+      where += (where.empty() ? "" : ", ") + axis.name + " " + number_text(value->second) + " " +
+               (is_axis ? unit_name(axis.unit()) : "steps");
     }
     ImGui::BeginDisabled(!connected());
     if (button("Go to", 60)) {
@@ -759,6 +761,7 @@ void Panel::positions_panel(float width, float height) {
     ImGui::Text("%s", p.name.c_str());
     ImGui::SameLine();
     ImGui::TextDisabled("%s", where.c_str());
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", where.c_str());
     ImGui::PopID();
   }
   ImGui::EndChild();
