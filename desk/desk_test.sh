@@ -6,6 +6,18 @@ set -euo pipefail
 
 desk=${1:?usage: desk_test.sh PATH/TO/hmc-desk}
 source_dir=$(cd "$(dirname "$0")/.." && pwd)
+# A profile with mistakes: each reported with its line and column, and hmc-desk ends (exit 1)
+# before it opens a window or a port.
+bad_profile=$(mktemp)
+printf '[axis.slide]\nmotor = 1\nrotary = true\nspead = "3deg/s"\n' >"$bad_profile"
+code=0
+out=$(DISPLAY='' "$desk" --profile "$bad_profile" --port sim://never 2>&1) || code=$?
+rm -f "$bad_profile"
+if [[ "$code" != 1 || "$out" != *":4:1: unknown key 'spead' in axis 'slide'"* || "$out" != *"has mistakes"* ]]; then
+  echo "desk_test: FAIL: a profile with a mistake: exit $code, $out" >&2
+  exit 1
+fi
+
 if ! command -v Xvfb >/dev/null; then
   echo "desk_test: skipped: Xvfb is not installed (scripts/setup installs xvfb)"
   exit 0
@@ -158,10 +170,11 @@ key +
 key shift+Left
 wait 300
 wait-for idle 5000
+expect-log "slide stops at its soft limit 0 mm"
 # Go to beyond the limits: refused, nothing sent; then 25 mm typed in.
 text "motor 1/go to" 400
 click "motor 1/Go"
-wait 200
+expect-log "400 mm is beyond its soft limits, 0 to 310 mm"
 text "motor 1/go to" 25
 click "motor 1/Go"
 wait 300
@@ -204,6 +217,9 @@ key space
 wait 300
 wait-for idle 3000
 screenshot gamepad
+# The window closes while a stick is held: the worker stops every motor on its way out.
+stick RY -1
+wait 300
 quit
 EOF
 start2=$(date +%s)

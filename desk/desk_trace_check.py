@@ -76,8 +76,11 @@ if len(runs3) >= 4:
     here = (before[-1] if before else 0) // 16
     check(here > 0 and here + int(runs3[3][1][3]) == 400000,
           "go to 400000 (steps) on motor 3: from %d, %s steps more" % (here, runs3[3][1][3]))
-    check(all(stops(m, t_space, float("inf")) for m in "123"), "space: a stop for every motor")
-check(len(runs3) == 4, "no run of motor 3 other than the stick's three and the go-to: %d" % len(runs3))
+    check(all(stops(m, t_space, runs3[4][0] if len(runs3) > 4 else float("inf")) for m in "123"),
+          "space: a stop for every motor")
+check(len(runs3) == 5, "no run of motor 3 other than the stick's three, the go-to and the last: %d" % len(runs3))
+if len(runs3) == 5:
+    check(all(stops(m, runs3[4][0], float("inf")) for m in "123"), "the window closed with a stick held: a stop for every motor")
 
 positions = json.load(open(positions_path))
 saved = positions.get("profiles", {}).get(profile_path, [])

@@ -135,8 +135,8 @@ int main(int argc, char** argv) {
     hmc::Result<hmc::Profile, hmc::ProfileError> loaded = hmc::load_profile(source->path);
     if (!loaded) {
       std::fprintf(stderr, "%s", loaded.error().text().c_str());
-      std::fprintf(stderr, "hmc-desk: the profile (%s) has mistakes: fix them, or name another with --profile\n",
-                   source->from.c_str());
+      std::fprintf(stderr, "hmc-desk: the profile %s (%s) has mistakes: fix them, or name another with --profile\n",
+                   source->path.c_str(), source->from.c_str());
       return 1;
     }
     profile = std::move(*loaded);

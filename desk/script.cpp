@@ -50,7 +50,7 @@ bool ScriptDriver::load(const std::string& path, std::string& error) {
   static const std::set<std::string> known{"connect", "disconnect", "wait", "wait-for", "click", "press", "hold",
                                            "release", "set", "jog", "move", "led", "servo", "open", "run",
                                            "screenshot", "quit", "text", "key", "stick", "button", "gamepad",
-                                           "focus", "hang"};
+                                           "focus", "hang", "expect-log"};
   std::string text;
   int line_number = 0;
   while (std::getline(in, text)) {
@@ -209,6 +209,15 @@ bool ScriptDriver::run(const Line& line, double now_s, const Snapshot& snapshot)
       }
     }
     return false;
+  }
+  if (op == "expect-log") {
+    // Some line of the event log holds TEXT (the board's worker may still be writing it).
+    for (const LogLine& logged : snapshot.log) {
+      if (logged.text.find(arg(1)) != std::string::npos) return true;
+    }
+    if (now_s - started_s_ < 3.0) return false;
+    fail("no line of the event log says \"" + arg(1) + "\"");
+    return true;
   }
   if (op == "hang") {
     // The panel stops drawing (as when a window is dragged on some systems): nothing reads the

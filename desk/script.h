@@ -25,6 +25,7 @@
 //   gamepad absent                    unplugs it (a stick or button line plugs it in)
 //   focus lost|back                   the window loses / gets back the keyboard focus
 //   hang MS                           the panel draws nothing for MS milliseconds (a stuck window)
+//   expect-log "TEXT"                 some line of the event log holds TEXT (within 3 s)
 //   screenshot NAME                   NAME.png in the screenshot directory
 //   quit
 #pragma once

@@ -576,9 +576,7 @@ MotorRecord Board::zero(const py::object& axis, const py::object& position) {
       return s.model().motor(m);
     }
     if (steps->rounded()) notes.push_back("position " + text + " is " + number_text(steps->exact) + " steps: rounded to " + std::to_string(steps->steps));
-    const StepCount board = a.to_board_position(steps->exact / a.steps_per_unit());
-    const SetPosition set{m, board.steps < 0 ? 1u : 0u, static_cast<uint32_t>(std::llabs(board.steps))};
-    if (SessionResult<BoardFrame> done = s.execute(set); !done) {
+    if (SessionResult<BoardFrame> done = s.execute(set_position_command(a, steps->exact / a.steps_per_unit())); !done) {
       failure.session = done.error();
       return s.model().motor(m);
     }
