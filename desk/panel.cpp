@@ -685,6 +685,11 @@ void Panel::file_panel(float width, float height) {
   group_.clear();
 }
 
+void Panel::save_positions() {
+  const Status written = positions_->save();
+  positions_error_ = written ? std::string() : "not saved: " + written.error().message;
+}
+
 void Panel::positions_panel(float width, float height) {
   group_ = "positions";
   ImGui::BeginChild("positions", ImVec2{width, height}, true);
@@ -722,10 +727,11 @@ void Panel::positions_panel(float width, float height) {
                                       : static_cast<double>(position) * snap_.model.motor(m).microstep / 256.0;
     }
     positions_->put(std::move(saved));
-    if (Status written = positions_->save(); !written) positions_where_ = written.error().message;
+    save_positions();
   }
   ImGui::EndDisabled();
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Saved in %s", positions_where_.c_str());
+  if (!positions_error_.empty()) ImGui::TextColored(kRed, "%s", positions_error_.c_str());
 
   ImGui::BeginChild("list", ImVec2{-1, -1}, false);
   std::optional<std::string> forget;
@@ -768,7 +774,7 @@ void Panel::positions_panel(float width, float height) {
   group_ = "positions";
   if (forget) {
     positions_->remove(*forget);
-    if (Status written = positions_->save(); !written) positions_where_ = written.error().message;
+    save_positions();
   }
   ImGui::EndChild();
   group_.clear();

@@ -48,6 +48,7 @@ class Panel {
   void file_panel(float width, float height);
   void log_panel(float width, float height);
   void positions_panel(float width, float height);
+  void save_positions();
   // The keys of `hmc jog` (hmc/jog.h), when no text field has the keyboard.
   void keyboard_jog();
   void gamepad_jog(bool focused);
@@ -73,6 +74,7 @@ class Panel {
   size_t jog_axis_ = 0;    // the axis jogged last: z zeroes it
   std::optional<SavedPositions> positions_;
   std::string positions_where_;  // the file, or why there is none
+  std::string positions_error_;  // why the last change could not be written
   std::string position_name_;
   Snapshot snap_;
   std::string group_;  // "motor 1", "LED 2" ...: the prefix of widget keys while drawing one
