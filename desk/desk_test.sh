@@ -6,14 +6,15 @@ set -euo pipefail
 
 desk=${1:?usage: desk_test.sh PATH/TO/hmc-desk}
 source_dir=$(cd "$(dirname "$0")/.." && pwd)
-# A profile with mistakes: each reported with its line and column, and hmc-desk ends (exit 1)
+# A profile with mistakes, named by HMC_PROFILE (found as hmc finds it): each mistake reported
+# with its line and column, and hmc-desk ends (exit 1)
 # before it opens a window or a port.
 bad_profile=$(mktemp)
 printf '[axis.slide]\nmotor = 1\nrotary = true\nspead = "3deg/s"\n' >"$bad_profile"
 code=0
-out=$(DISPLAY='' "$desk" --profile "$bad_profile" --port sim://never 2>&1) || code=$?
+out=$(DISPLAY='' HMC_PROFILE="$bad_profile" "$desk" --port sim://never 2>&1) || code=$?
 rm -f "$bad_profile"
-if [[ "$code" != 1 || "$out" != *":4:1: unknown key 'spead' in axis 'slide'"* || "$out" != *"has mistakes"* ]]; then
+if [[ "$code" != 1 || "$out" != *":4:1: unknown key 'spead' in axis 'slide'"* || "$out" != *"(HMC_PROFILE) has mistakes"* ]]; then
   echo "desk_test: FAIL: a profile with a mistake: exit $code, $out" >&2
   exit 1
 fi
