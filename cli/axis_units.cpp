@@ -61,8 +61,8 @@ Result<std::vector<uint32_t>> resolve_motors(const std::string& text, const Prof
 }
 
 Status send_soft_limits(Session& s, const Axis& axis) {
-  const std::optional<SoftLimits> limits = soft_limits_command(axis);
-  if (!limits || s.firmware() != Firmware::kV2 || !s.model().motor(axis.motor).homed) return Done{};
+  const std::optional<SoftLimits> limits = soft_limits_to_send(axis, s.model().motor(axis.motor));
+  if (!limits || s.firmware() != Firmware::kV2) return Done{};
   if (SessionResult<BoardFrame> sent = s.execute(*limits); !sent) {
     return Error{"axis '" + axis.name + "': its soft limits were not taken: " + sent.error().message};
   }

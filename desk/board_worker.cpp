@@ -497,8 +497,10 @@ void BoardWorker::zero(uint32_t m) {
   jog_target_[m - 1].reset();
   send(set_position_command(axis, 0), axis.name + ": zero here");
   // Its position means something now: the profile's soft limits go to the board (as `hmc zero`).
-  const std::optional<SoftLimits> limits = soft_limits_command(axis);
-  if (limits && session_ && session_->model().motor(m).homed) send(*limits, axis.name + ": soft limits to the board");
+  if (!session_ || session_->firmware() != Firmware::kV2) return;
+  if (const std::optional<SoftLimits> limits = soft_limits_to_send(axis, session_->model().motor(m))) {
+    send(*limits, axis.name + ": soft limits to the board");
+  }
 }
 
 void BoardWorker::stick_run(const Request& q) {

@@ -153,6 +153,11 @@ std::optional<SoftLimits> soft_limits_command(const Axis& axis) {
   return SoftLimits{axis.motor, low < 0 ? 1u : 0u, magnitude(low), high < 0 ? 1u : 0u, magnitude(high)};
 }
 
+std::optional<SoftLimits> soft_limits_to_send(const Axis& axis, const MotorStatus& motor) {
+  if (!motor.homed) return std::nullopt;
+  return soft_limits_command(axis);
+}
+
 std::optional<std::string> beyond_soft_limits(const Axis& axis, const MotorStatus& motor, double target) {
   if (!axis.limit_min || !motor.homed) return std::nullopt;
   if (target >= *axis.limit_min - 1e-9 && target <= *axis.limit_max + 1e-9) return std::nullopt;

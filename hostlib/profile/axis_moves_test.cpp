@@ -106,6 +106,8 @@ TEST_CASE("soft limits: judged only once homed, sent as LIM in the board's posit
   CHECK(swapped->low_position() == -310 * 80 * 16);
   CHECK(swapped->high_position() == 0);
   CHECK_FALSE(soft_limits_command(plain_motor_axis(3, 16)));
+  CHECK_FALSE(soft_limits_to_send(slider(), at(0, false)));  // not homed: no limits to the board yet
+  CHECK(soft_limits_to_send(slider(), at(0)) == soft_limits_command(slider()));
 }
 
 TEST_CASE("homing as the profile says, and a motor without a profile axis") {

@@ -74,6 +74,8 @@ HomingSetup homing_setup(const Axis& axis, StepperMove move);
 // nullopt for an axis without limits. Send it only once the motor is homed or zeroed: before
 // that its position is wherever it stood at power-up (grbl enforces limits only then too).
 std::optional<SoftLimits> soft_limits_command(const Axis& axis);
+// The LIM to send for `axis` now: its limits once `motor` is homed or zeroed, else nullopt.
+std::optional<SoftLimits> soft_limits_to_send(const Axis& axis, const MotorStatus& motor);
 
 // The board's POS that makes a resting motor's position `axis_position` (axis units) from now on:
 // 0 zeroes it here. One conversion for `hmc zero`, `hmc jog`'s z and hmc-desk's "set zero here".
