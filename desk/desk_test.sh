@@ -236,4 +236,39 @@ for shot in units gamepad; do
   [[ -s "$work/shots/$shot.png" ]] || fail "no screenshot $shot.png"
 done
 [[ -n "${DESK_TEST_KEEP:-}" ]] && cp "$work"/shots/*.png "$DESK_TEST_KEEP"/
+
+# Real key events from the X server (xdotool, through XTEST): Right, Shift held + Right, z,
+# through GLFW's key callbacks into the panel. Each key is held 120 ms, as a finger would: ImGui
+# 1.86 sees keys as up or down once a frame, and its key repeat starts after 275 ms.
+if command -v xdotool >/dev/null; then
+  trace3="$work/trace3.jsonl"
+  mkdir -p "$work/state3"
+  printf 'connect\nwait-for connected 5000\nwait 3500\nwait-for idle 3000\nquit\n' >"$work/script3.txt"
+  ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0" \
+  HMC_SIM_STATE="$work/state3" DISPLAY="$display" timeout 60 "$desk" \
+    --profile "$source_dir/examples/camera-slider.toml" \
+    --port "sim://desktest3?fresh&trace=$trace3" --script "$work/script3.txt" --screenshot-dir "$work/shots" \
+    >"$work/desk3.log" 2>&1 &
+  desk_pid=$!
+  # Connected once the panel's first status refresh reaches the board.
+  for _ in $(seq 100); do
+    grep -q '"ev":"rx","line":"STX#[0-9]*#STA#' "$trace3" 2>/dev/null && break
+    sleep 0.1
+  done
+  sleep 0.5
+  hold() { DISPLAY="$display" xdotool keydown "$1"; sleep 0.12; DISPLAY="$display" xdotool keyup "$1"; sleep 0.6; }
+  hold Right
+  DISPLAY="$display" xdotool keydown shift
+  sleep 0.1
+  hold Right
+  DISPLAY="$display" xdotool keyup shift
+  hold z
+  wait "$desk_pid" || fail "hmc-desk (X keys) failed: $(cat "$work/desk3.log")"
+  got=$(grep -oE '"ev":"rx","line":"STX#[0-9]+#(STM#1#[12]|POS)#[^"]*' "$trace3" | sed -E 's/.*"line":"STX#[0-9]+#//; s/#[0-9]+#ETX$//' | tr '\n' ' ')
+  [[ "$got" == "STM#1#1#16#80#250 STM#1#1#16#800#250 POS#1#0#0 " ]] ||
+    fail "X keys Right, Shift+Right, z: the board got '$got', not 80 and 800 steps, then POS 1 0 0"
+  echo "desk_test: X keys Right, Shift+Right, z: $got"
+else
+  echo "desk_test: the X key part skipped: xdotool is not installed (scripts/setup installs it)"
+fi
 echo "desk_test: done in $(($(date +%s) - start)) s"
