@@ -269,6 +269,10 @@ Result<std::unique_ptr<Transport>> open_emu_port(std::string_view url, const Por
   Result<EmuPortOptions> parsed = parse_emu_url(url);
   if (!parsed) return parsed.error();
   const EmuPortOptions& options = *parsed;
+  // A named image is checked first: its mistake is the one to report.
+  if (!options.image.empty()) {
+    if (Result<std::string> named = find_image(options.image, ""); !named) return named.error();
+  }
   Result<std::string> emulator = find_emulator();
   if (!emulator) return emulator.error();
   Result<std::string> image = find_image(options.image, *emulator);
