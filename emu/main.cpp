@@ -28,6 +28,7 @@
 #include "elf/elf_image.h"
 #include "front/events.h"
 #include "front/links.h"
+#include "front/raw_image.h"
 #include "sim_io.h"
 #include "sim_options.h"
 #include "sim_script.h"
@@ -56,7 +57,8 @@ struct Options {
   bool pty = false;
   std::string tcp;      // --tcp HOST:PORT, as hmc-sim's
   std::string control;  // --control HOST:PORT: hmc-sim's control channel
-  double hold_input_s = 0;  // the host's bytes wait until this virtual time (and the first line)
+  double hold_input_s = 0;
+  std::string raw_at = "0x2000";  // where a raw .bin image starts  // the host's bytes wait until this virtual time (and the first line)
   bool fast = false;
   uint32_t baud = 115200;
   double max_time_s = 0;
@@ -354,7 +356,10 @@ int run(const Options& options) {
     std::cerr << "hmc-emu: give the firmware ELF, or --usb-pty/--uf2-drive to flash one first\n";
     return kExitUsage;
   }
-  if (!options.image.empty() && !load_elf(options.image, image, error)) {
+  const bool raw = is_raw_image(options.image);
+  if (!options.image.empty() &&
+      !(raw ? load_raw_image(options.image, options.raw_at == "0x0" ? 0 : kAppBase, image, error)
+            : load_elf(options.image, image, error))) {
     std::cerr << "hmc-emu: " << error << '\n';
     return errno == ENOENT || error.rfind("cannot read", 0) == 0 ? kExitIo : kExitImage;
   }
@@ -467,8 +472,12 @@ int main(int argc, char** argv) {
   hmc::emu::Options options;
   CLI::App app{"hmc-emu: runs the SAMD21 firmware image on an emulated board (docs/emu.md)"};
   app.add_option("image", options.image,
-                 "the firmware ELF (hmc-firmware.elf); with --usb-pty/--uf2-drive, what the flash holds "
+                 "the firmware ELF (hmc-firmware.elf) or raw image (hmc-firmware.bin, see --raw-at); with --usb-pty/--uf2-drive, what the flash holds "
                  "before flashing (default: erased)");
+  app.add_option("--raw-at", options.raw_at,
+                 "where an IMAGE ending in .bin (raw flash bytes, no symbols) starts: 0x2000 (hmc-firmware.bin, "
+                 "behind the bootloader; the default) or 0x0 (hmc-firmware-nobl.bin)")
+      ->check(CLI::IsMember({"0x2000", "0x0"}));
   CLI::Option* pty = app.add_flag("--pty", options.pty, "serve the command UART on a new pseudo-terminal (its path is printed)");
   app.add_option("--tcp", options.tcp,
                  "serve the command UART on a TCP listener at HOST:PORT (port 0: any free one; the address is "

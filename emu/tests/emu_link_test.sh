@@ -76,8 +76,10 @@ for _ in $(seq 300); do
 done
 child=$(pgrep -P "$hmc_pid" | head -1)
 check "monitor: hmc-emu started" "yes" "$([[ -n $child ]] && alive "$child" && echo yes)"
-kill -9 "$hmc_pid"
-wait "$hmc_pid" 2>/dev/null
+{
+  kill -9 "$hmc_pid"
+  wait "$hmc_pid"
+} 2>/dev/null
 none_left "hmc killed"
 
 # 3. Port errors: a clear message, exit 3 (a port that cannot be used), no hmc-emu started.
@@ -90,15 +92,22 @@ none_left "port errors"
 if [[ $quick != quick ]]; then
   # 4. status of a board just booted reads as hmc-sim's, but for the servos: the image's boot
   # pulse train (500 ms after its last SVM) has stopped by the time emu:// lets the host in.
-  # The image comes from HMC_EMU_FIRMWARE here.
-  emu_out=$(HMC_EMU_FIRMWARE=$image "$hmc" --port "emu://?fast" --timeout 5000 status 2>/dev/null)
+  # Installed as the packages install them: hmc and hmc-emu in bin, the hmc-firmware package's
+  # raw image in share/hmc/firmware; hmc finds both itself.
+  mkdir -p "$work/usr/bin" "$work/usr/share/hmc/firmware"
+  cp "$hmc" "$work/usr/bin/hmc"
+  cp "$work/hmc-emu" "$work/usr/bin/hmc-emu"
+  cp "$(dirname "$image")/hmc-firmware.bin" "$work/usr/share/hmc/firmware/"
+  emu_out=$(env -u HMC_EMU "$work/usr/bin/hmc" --port "emu://?fast" --timeout 5000 status 2>"$work/status.err")
+  check_match "status: the installed image" "^board: emulated board emu://\\?fast \\(hmc-emu $work/usr/share/hmc/firmware/hmc-firmware.bin," \
+    "$(cat "$work/status.err")"
   check_match "status: servos released" '^servo 1 \(pan\): released +servo 2 \(tilt\): released$' "$emu_out"
   sim_out=$("$hmc" --port "$sim_port" status 2>/dev/null)
   check "status: as hmc-sim's (servo line aside)" "$(grep -v '^servo ' <<<"$sim_out")" "$(grep -v '^servo ' <<<"$emu_out")"
 
   # 5. Homing against the reverse switch, placed 50 full steps behind the start (axis=).
   expect home-1 0 '^motor 1: homed, at 0 steps of 1/16' -- \
-    "$hmc" --port "emu://$image?fast&axis=1:0:409600:12800" --timeout 5000 home 1
+    env HMC_EMU_FIRMWARE="$image" "$hmc" --port "emu://?fast&axis=1:0:409600:12800" --timeout 5000 home 1
   none_left "home"
 
   # 6. A board that stays up (hmc-emu --tcp) with the control channel: the emergency switch
@@ -121,7 +130,7 @@ if [[ $quick != quick ]]; then
   pids+=("$move_pid")
   # hmc names the board once VER is answered (after the self-test); its move follows.
   for _ in $(seq 200); do
-    grep -q '^board: ' "$work/estop.out" && break
+    grep -q '^board: ' "$work/estop.out" 2>/dev/null && break
     sleep 0.05
   done
   before=$(steps)
@@ -150,13 +159,13 @@ if [[ $quick != quick ]]; then
   monitor_pid=$!
   pids+=("$monitor_pid")
   for _ in $(seq 200); do
-    grep -q 'listening until Ctrl-C' "$work/fault.out" && break
+    grep -q 'listening until Ctrl-C' "$work/fault.out" 2>/dev/null && break
     sleep 0.05
   done
   control "fault 2 2"
   check "fault: control answer" "ok" "$answer"
   for _ in $(seq 100); do
-    grep -q 'EVF' "$work/fault.out" && break
+    grep -q 'EVF' "$work/fault.out" 2>/dev/null && break
     sleep 0.05
   done
   check_match "fault: hmc monitor shows the board's report" 'EVF event: motor 2 driver fault: AOCP \(STATUS 0x02\)' \

@@ -41,7 +41,8 @@ constexpr const char* kHoldInputSeconds = "1.0";
 constexpr auto kStartTimeout = std::chrono::seconds(60);
 constexpr auto kEndTimeout = std::chrono::seconds(2);
 constexpr const char* kFirmwareInBuildTree = "build/firmware/firmware/targets/samd21/hmc-firmware.elf";
-constexpr const char* kFirmwareInstalled = "../share/hmc/firmware/hmc-firmware.elf";
+// The hmc-firmware package's image: raw flash bytes at 0x2000, which hmc-emu runs as they are.
+constexpr const char* kFirmwareInstalled = "../share/hmc/firmware/hmc-firmware.bin";
 
 std::string env(const char* name) {
   const char* value = std::getenv(name);

@@ -3,10 +3,12 @@
 // link the emulator: it runs the hmc-emu program.
 //
 //   emu://[IMAGE][?OPTION&...]
-//     IMAGE          the ELF to run (hmc-firmware.elf); absolute (emu:///path/x.elf) or relative
-//                    to the current directory; default: $HMC_EMU_FIRMWARE, else the firmware
-//                    preset's image in the build tree above this program, else the installed one
-//                    (<bindir>/../share/hmc/firmware/hmc-firmware.elf, the hmc-firmware package)
+//     IMAGE          the image to run: an ELF (hmc-firmware.elf), or a raw .bin taken as the
+//                    application at 0x2000 (hmc-firmware.bin); absolute (emu:///path/x.elf) or
+//                    relative to the current directory; default: $HMC_EMU_FIRMWARE, else the
+//                    firmware preset's ELF in the build tree above this program, else the
+//                    installed one (<bindir>/../share/hmc/firmware/hmc-firmware.bin, the
+//                    hmc-firmware package)
 //     fast           virtual time unthrottled (hmc-emu --fast)
 //     axis=M:LOW:HIGH:START   motor 1 or 2's switch positions and start (repeatable; hmc-emu --axis)
 //     control=HOST:PORT       hmc-emu's control channel (press, release, estop, fault, status)
