@@ -3,7 +3,8 @@
 # starts hmc-emu itself) a ramped move waited for gives hmc-sim's result and status reads as
 # hmc-sim's, homing finds a switch placed with axis=; through hmc-emu --tcp with --control, an
 # emergency press on the control channel ends a waited move (hmc reports it, exit 5) and the
-# motors stop; every hmc-emu that hmc started ends with it, also when hmc is killed.
+# motors stop, and a driver fault is reported; the emergency press again through emu://'s own
+# control=; every hmc-emu that hmc started ends with it, also when hmc is killed.
 # hmc-sim's board is sim:// here: the same board as the hmc-sim program's, in hmc's process.
 # Usage: emu_link_test.sh HMC_EMU HMC IMAGE_DIR [quick]
 #   quick (the sanitizer presets): only the move, the kill and the port errors.
@@ -178,6 +179,31 @@ if [[ $quick != quick ]]; then
   kill -TERM "$pid"
   await_exit "$pid" 10
   check "hmc-emu --tcp: exit code after SIGTERM" 0 "$finished"
+
+  # 7. The same through emu://'s own control channel (control=): hmc-emu prints its address on
+  # hmc's standard error before the board answers.
+  "$hmc" --port "emu://$image?fast&control=127.0.0.1:0" --timeout 5000 move 1 100000 --wait >"$work/emu-estop.out" \
+    2>"$work/emu-estop.err" &
+  move_pid=$!
+  pids+=("$move_pid")
+  control=
+  for _ in $(seq 200); do
+    control=$(sed -n 's/^hmc-emu: control listening on tcp:\/\/127\.0\.0\.1:\([0-9]*\)$/\1/p' "$work/emu-estop.err" 2>/dev/null)
+    [[ -n $control ]] && grep -q '^board: ' "$work/emu-estop.err" && break
+    sleep 0.05
+  done
+  if [[ -z $control ]]; then
+    fail "emu:// with control=: no control address: $(cat "$work/emu-estop.err")"
+  else
+    exec 3<>"/dev/tcp/127.0.0.1/$control"
+    control estop
+    check "emu:// estop: control answer" "ok" "$answer"
+    exec 3>&-
+    await_exit "$move_pid" 20
+    check "emu:// estop: hmc's exit code" 5 "$finished"
+    check_match "emu:// estop: hmc reports the emergency" '^motor 1: ended early: emergency, at [0-9]+ steps' \
+      "$(cat "$work/emu-estop.out")"
+  fi
 fi
 
 none_left "the end"
