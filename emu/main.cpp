@@ -57,8 +57,8 @@ struct Options {
   bool pty = false;
   std::string tcp;      // --tcp HOST:PORT, as hmc-sim's
   std::string control;  // --control HOST:PORT: hmc-sim's control channel
-  double hold_input_s = 0;
-  std::string raw_at = "0x2000";  // where a raw .bin image starts  // the host's bytes wait until this virtual time (and the first line)
+  double hold_input_s = 0;  // the host's bytes wait until this virtual time (and the first line)
+  std::string raw_at = "0x2000";  // where a raw .bin image starts
   bool fast = false;
   uint32_t baud = 115200;
   double max_time_s = 0;
@@ -336,7 +336,7 @@ class Emulator {
   }
   // Script times are hmc-sim's ticks (1/48 µs) since the first power-on.
   static uint64_t event_ps(const sim::ScriptEvent& event) { return event.at * 1000000u / 48u; }
-  // The script's events due by now: a line onto the UART's wire, a switch pressed or released.
+  // The script's events due by now: a line onto the UART's wire, a switch, a driver fault.
   // True when any was applied (the run then waits for the board's answer before ending).
   bool apply_due_events() {
     const size_t first = next_event_;
