@@ -81,7 +81,8 @@ Result<std::string> default_port(bool quiet) {
 
 void add_global_options(CLI::App& app, GlobalOptions& o) {
   o.port_option = app.add_option("-p,--port", o.port,
-                 "the board: /dev/ttyUSB0, tcp://HOST:PORT, a pseudo-terminal, or sim:// for the simulated board "
+                 "the board: /dev/ttyUSB0, tcp://HOST:PORT, a pseudo-terminal, sim:// for the simulated board, or emu:// for "
+                 "the firmware image on hmc-emu "
                  "(default: the one FT232R bridge found)")
       ->envname("HMC_PORT");
   o.baud_option = app.add_option("--baud", o.baud, "serial baud rate (default 115200)")->check(CLI::Range(300u, 4000000u));

@@ -26,6 +26,9 @@
 #include "chip/system.h"
 #include "cpu/cpu.h"
 #include "elf/elf_image.h"
+#include "front/events.h"
+#include "front/links.h"
+#include "front/raw_image.h"
 #include "sim_io.h"
 #include "sim_options.h"
 #include "sim_script.h"
@@ -52,6 +55,10 @@ void request_stop(int) { g_stop = 1; }
 struct Options {
   std::string image;
   bool pty = false;
+  std::string tcp;      // --tcp HOST:PORT, as hmc-sim's
+  std::string control;  // --control HOST:PORT: hmc-sim's control channel
+  double hold_input_s = 0;  // the host's bytes wait until this virtual time (and the first line)
+  std::string raw_at = "0x2000";  // where a raw .bin image starts
   bool fast = false;
   uint32_t baud = 115200;
   double max_time_s = 0;
@@ -126,8 +133,8 @@ std::string format_seconds(uint64_t ps) {
 class Emulator {
  public:
   Emulator(const Options& options, const ElfImage& image, sim::Link& link,
-           std::vector<sim::ScriptEvent> script)
-      : options_(options), image_(image), link_(link), script_(std::move(script)) {}
+           std::vector<sim::ScriptEvent> script, sim::ControlServer* control)
+      : options_(options), image_(image), link_(link), script_(std::move(script)), control_(control) {}
 
   bool power_on(uint8_t reset_cause, std::string& error) {
     ChipOptions chip_options;
@@ -224,7 +231,7 @@ class Emulator {
         quiet_since = now_ps();
         if (out.find('\n') != std::string::npos) booted_ = true;
       }
-      if (booted_ && !held_.empty()) {
+      if (taking_input() && !held_.empty()) {
         uart.host_send(held_);
         held_.clear();
       }
@@ -264,6 +271,7 @@ class Emulator {
       // Wait for input: not at all in fast mode, until the next millisecond in real time.
       poll_.clear();
       link_.arm(poll_);
+      if (control_ != nullptr) control_->arm(poll_);
       std::vector<pollfd>& fds = poll_.fds();
       int timeout_ms = options_.fast ? 0 : 1;
       if (input_ended) timeout_ms = 0;
@@ -274,9 +282,13 @@ class Emulator {
       if (!in.empty()) {
         // Until the board's first line (its boot event) the host's bytes wait: on the board
         // they would reach a receiver not yet enabled and be lost (docs/emu.md).
-        if (booted_) uart.host_send(in);
+        if (taking_input()) uart.host_send(in);
         else held_ += in;
         quiet_since = now_ps();
+      }
+      if (held_.empty() && !uart.receiving()) link_.input_taken();
+      if (control_ != nullptr) {
+        control_->service(poll_, [this](std::string_view line) { return control_answer(line); });
       }
       if (link_.detached() && link_.ends_at_detach() && !input_ended) {
         input_ended = true;
@@ -298,40 +310,39 @@ class Emulator {
   bool booted_ = false;  // the board has sent its first line since power-on
   bool measuring_ = false;
   Snapshot measure_start_;
-  std::string held_;     // host bytes waiting for it
+  std::string held_;     // host bytes waiting for it (and for --hold-input)
   std::vector<sim::ScriptEvent> script_;
   size_t next_event_ = 0;
+  sim::ControlServer* control_;
   bool stalled_ = false;     // --stall-at reached: the CPU executes nothing until a reset
   bool stall_done_ = false;  // the stall happens once
   uint64_t stall_at_ps() const { return static_cast<uint64_t>(options_.stall_at_s * 1e12); }
 
   bool script_done() const { return next_event_ == script_.size(); }
+  bool taking_input() const {
+    return booted_ && now_ps() >= static_cast<uint64_t>(options_.hold_input_s * 1e12);
+  }
+  void send_line(const std::string& line) {
+    if (taking_input()) machine_.chip->sercom(kUartSercom).host_send(line);
+    else held_ += line;
+  }
+  // The control channel: one command a line, applied at once (docs/sim.md, "The control channel").
+  std::string control_answer(std::string_view line) {
+    const sim::Result<sim::SimCommand> command = sim::parse_command(line);
+    if (!command) return "error: " + command.error;
+    if (command.value->action == sim::Action::kStatus) return emu_status_json(machine_.chip->board(), now_ps());
+    apply_event(*machine_.chip, *command.value, [this](const std::string& text) { send_line(text); });
+    return "ok";
+  }
   // Script times are hmc-sim's ticks (1/48 µs) since the first power-on.
   static uint64_t event_ps(const sim::ScriptEvent& event) { return event.at * 1000000u / 48u; }
-  // The script's events due by now: a line onto the UART's wire, a switch pressed or released.
+  // The script's events due by now: a line onto the UART's wire, a switch, a driver fault.
   // True when any was applied (the run then waits for the board's answer before ending).
   bool apply_due_events() {
-    Chip& chip = *machine_.chip;
     const size_t first = next_event_;
     while (!script_done() && event_ps(script_[next_event_]) <= now_ps()) {
-      const sim::SimCommand& c = script_[next_event_++].command;
-      switch (c.action) {
-        case sim::Action::kSend:
-          if (booted_) chip.sercom(kUartSercom).host_send(c.text + "\n");
-          else held_ += c.text + "\n";
-          break;
-        case sim::Action::kPress:
-        case sim::Action::kRelease:
-          chip.board().set_switch("limit" + std::to_string(c.motor) + (c.end == 0 ? "-" : "+"),
-                                  c.action == sim::Action::kPress);
-          break;
-        case sim::Action::kEstop:
-        case sim::Action::kEstopRelease:
-          chip.board().set_switch("emergency", c.action == sim::Action::kEstop);
-          break;
-        default:
-          break;  // refused when the script was loaded
-      }
+      apply_event(*machine_.chip, script_[next_event_++].command,
+                  [this](const std::string& text) { send_line(text); });
     }
     return next_event_ != first;
   }
@@ -345,7 +356,10 @@ int run(const Options& options) {
     std::cerr << "hmc-emu: give the firmware ELF, or --usb-pty/--uf2-drive to flash one first\n";
     return kExitUsage;
   }
-  if (!options.image.empty() && !load_elf(options.image, image, error)) {
+  const bool raw = is_raw_image(options.image);
+  if (!options.image.empty() &&
+      !(raw ? load_raw_image(options.image, options.raw_at == "0x0" ? 0 : kAppBase, image, error)
+            : load_elf(options.image, image, error))) {
     std::cerr << "hmc-emu: " << error << '\n';
     return errno == ENOENT || error.rfind("cannot read", 0) == 0 ? kExitIo : kExitImage;
   }
@@ -356,16 +370,28 @@ int run(const Options& options) {
               << "the bootloader)\n";
     return kExitImage;
   }
-  sim::Result<std::unique_ptr<sim::Link>> link =
-      options.pty ? sim::open_pty_link(options.quiet ? nullptr : &std::cerr)
-                  : sim::open_stdio_link();
+  const sim::Notes notes = options.quiet ? nullptr : &std::cerr;
+  sim::Result<std::unique_ptr<sim::Link>> link = open_link(options.pty, options.tcp, notes);
   if (!link) {
     std::cerr << "hmc-emu: " << link.error << '\n';
     return kExitIo;
   }
-  if (const std::string text = (*link.value)->announcement(); !text.empty()) {
-    std::cerr << "hmc-emu: " << text << '\n' << std::flush;
+  std::unique_ptr<sim::ControlServer> control;
+  if (!options.control.empty()) {
+    const sim::HostPort at = *sim::parse_host_port(options.control).value;  // checked by the option
+    sim::Result<std::unique_ptr<sim::ControlServer>> opened = sim::ControlServer::open(at.host, at.port, notes);
+    if (!opened) {
+      std::cerr << "hmc-emu: control: " << opened.error << '\n';
+      return kExitIo;
+    }
+    control = std::move(*opened.value);
   }
+  // Printed even with --quiet: they are how a client finds the board.
+  if (const std::string text = (*link.value)->announcement(); !text.empty()) {
+    std::cerr << "hmc-emu: " << text << '\n';
+  }
+  if (control) std::cerr << "hmc-emu: control listening on " << control->address() << '\n';
+  std::cerr << std::flush;
   signal(SIGINT, request_stop);
   signal(SIGTERM, request_stop);
   signal(SIGPIPE, SIG_IGN);
@@ -388,19 +414,10 @@ int run(const Options& options) {
       std::cerr << "hmc-emu: " << options.script << ":" << parsed.error << '\n';
       return kExitUsage;
     }
-    for (const sim::ScriptEvent& event : *parsed.value) {
-      const sim::Action a = event.command.action;
-      if (a != sim::Action::kSend && a != sim::Action::kPress && a != sim::Action::kRelease &&
-          a != sim::Action::kEstop && a != sim::Action::kEstopRelease) {
-        std::cerr << "hmc-emu: " << options.script << ":" << event.line
-                  << ": only send, press, release, estop and estop release are modelled\n";
-        return kExitUsage;
-      }
-    }
     script = std::move(*parsed.value);
   }
 
-  Emulator emulator(options, image, **link.value, std::move(script));
+  Emulator emulator(options, image, **link.value, std::move(script), control.get());
   if (!emulator.power_on(Pm::kCausePowerOn, error)) {
     std::cerr << "hmc-emu: " << error << '\n';
     return kExitImage;
@@ -448,12 +465,35 @@ int run(const Options& options) {
 }  // namespace hmc::emu
 
 int main(int argc, char** argv) {
+  const auto host_port_check = [](const std::string& text) {
+    const hmc::sim::Result<hmc::sim::HostPort> at = hmc::sim::parse_host_port(text);
+    return at ? std::string() : at.error;
+  };
   hmc::emu::Options options;
   CLI::App app{"hmc-emu: runs the SAMD21 firmware image on an emulated board (docs/emu.md)"};
   app.add_option("image", options.image,
-                 "the firmware ELF (hmc-firmware.elf); with --usb-pty/--uf2-drive, what the flash holds "
+                 "the firmware ELF (hmc-firmware.elf) or raw image (hmc-firmware.bin, see --raw-at); with --usb-pty/--uf2-drive, what the flash holds "
                  "before flashing (default: erased)");
-  app.add_flag("--pty", options.pty, "serve the command UART on a new pseudo-terminal (its path is printed)");
+  app.add_option("--raw-at", options.raw_at,
+                 "where an IMAGE ending in .bin (raw flash bytes, no symbols) starts: 0x2000 (hmc-firmware.bin, "
+                 "behind the bootloader; the default) or 0x0 (hmc-firmware-nobl.bin)")
+      ->check(CLI::IsMember({"0x2000", "0x0"}));
+  CLI::Option* pty = app.add_flag("--pty", options.pty, "serve the command UART on a new pseudo-terminal (its path is printed)");
+  app.add_option("--tcp", options.tcp,
+                 "serve the command UART on a TCP listener at HOST:PORT (port 0: any free one; the address is "
+                 "printed), one client at a time, as hmc-sim's")
+      ->type_name("HOST:PORT")
+      ->check(host_port_check)
+      ->excludes(pty);
+  app.add_option("--control", options.control,
+                 "hmc-sim's control channel on a TCP listener at HOST:PORT: press/release/auto M END, estop, "
+                 "estop release, fault M BITS, send TEXT, status (docs/sim.md)")
+      ->type_name("HOST:PORT")
+      ->check(host_port_check);
+  app.add_option("--hold-input", options.hold_input_s,
+                 "the host's bytes wait until this many seconds of virtual time since power-up (e.g. past the "
+                 "power-up self-test); they always wait for the board's first line")
+      ->check(CLI::NonNegativeNumber);
   app.add_flag("--fast", options.fast, "run virtual time unthrottled instead of in real time");
   app.add_option("--baud", options.baud, "the host side's baud rate (the image's own is 115200)")
       ->check(CLI::Range(300, 4000000));

@@ -81,7 +81,8 @@ the Unicorn engine, with the chip's peripherals and the board's DRV8711s),
 serving the serial protocol like the real board. hmc-emu-bootloader plays
 the SAM-BA bootloader and the UF2 drive, so bossac and hmc flash can be run
 against it.")
-set(CPACK_DEBIAN_HMC-EMU_PACKAGE_SUGGESTS "hmc, bossa-cli")
+# hmc-firmware: the image that `hmc --port emu://` runs by default.
+set(CPACK_DEBIAN_HMC-EMU_PACKAGE_SUGGESTS "hmc, hmc-firmware, bossa-cli")
 
 set(CPACK_COMPONENT_PYTHON3-HMC_DESCRIPTION
     "Python module for the Hybrid Motor Controller board

@@ -44,9 +44,15 @@ void Board::drive_switch(unsigned motor, unsigned end, bool pressed) {
 }
 
 void Board::update_limits(unsigned motor) {
-  if (!config_[motor].has_switches) return;
-  drive_switch(motor, 0, axes_[motor].position <= config_[motor].low_switch);
-  drive_switch(motor, 1, axes_[motor].position >= config_[motor].high_switch);
+  if (motor >= 2) return;
+  const bool at[2] = {config_[motor].has_switches && axes_[motor].position <= config_[motor].low_switch,
+                      config_[motor].has_switches && axes_[motor].position >= config_[motor].high_switch};
+  for (unsigned end = 0; end < 2; ++end) drive_switch(motor, end, held_[motor][end] < 0 ? at[end] : held_[motor][end] == 1);
+}
+
+void Board::hold_limit(unsigned motor, unsigned end, int held) {
+  held_[motor][end] = held;
+  update_limits(motor);
 }
 
 void Board::outputs_changed(unsigned group, uint32_t before, uint32_t after) {
@@ -115,6 +121,7 @@ bool Board::set_switch(const std::string& name, bool pressed) {
   if (name == "limit2-") sw = &pinmap::kLimits[1][0];
   if (name == "limit2+") sw = &pinmap::kLimits[1][1];
   if (sw == nullptr) return false;
+  if (sw == &pinmap::kEmergency) emergency_ = pressed;
   // A pressed switch drives its pin to its active level; released, the pin is left to its pull.
   chip_.port().drive(sw->pin.group, sw->pin.number, pressed ? (sw->active_low ? 0 : 1) : -1);
   return true;

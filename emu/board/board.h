@@ -40,6 +40,13 @@ class Board {
   void set_axis(unsigned motor, const sim::AxisConfig& config);
   // Switches by name: "limit1-", "limit1+", "limit2-", "limit2+", "emergency".
   bool set_switch(const std::string& name, bool pressed);
+  // Limit switch `end` of motor `motor` (0 or 1) held pressed (1) or open (0) wherever the axis
+  // is, or following the axis again (-1) — hmc-sim's press/release/auto.
+  void hold_limit(unsigned motor, unsigned end, int held);
+  bool emergency() const { return emergency_; }
+  // Latches DRV8711 STATUS bits of motor `motor`'s (0..2) driver, as a fault would (7.6.8:
+  // the bits stay set until the firmware writes 0 to them).
+  void latch_fault(unsigned motor, uint8_t bits) { drivers_[motor].regs[7] |= bits; }
 
   const Axis& axis(unsigned motor) const { return axes_[motor]; }
   const Drv8711& driver(unsigned chip) const { return drivers_[chip]; }
@@ -53,6 +60,8 @@ class Board {
   Chip& chip_;
   std::array<sim::AxisConfig, 3> config_ = sim::SimConfig{}.axes;
   std::array<Axis, 3> axes_{};
+  int held_[2][2] = {{-1, -1}, {-1, -1}};  // hold_limit(): -1 follows the axis
+  bool emergency_ = false;
   std::array<Drv8711, 3> drivers_{};
   std::array<std::vector<uint8_t>, 2> strip_bytes_{};
 };

@@ -16,9 +16,8 @@ What differs from behaviour_test (the host-built core on the simulated board), a
     compared here (the replies and events carry the positions and states the firmware reports).
   - The image is built in normal mode: `legacy` and `seed` modes are not played.
   - A vector's axes become hmc-emu --axis options; its accelerations are set by SET lines
-    100 ms before it starts (their ACKs are set aside). Vectors that inject driver faults or
-    put a switch back to its axis position (`auto`) are skipped and listed: hmc-emu does not
-    model them yet.
+    100 ms before it starts (their ACKs are set aside). Driver faults (`fault`: DRV8711 STATUS
+    bits) and a switch put back to its axis position (`auto`) are injected as hmc-sim does.
   - The image receives at 115200 baud, as the sim with "baud" set; lines take their wire time,
     so the fields uart_differences.json lists (a running motor's STA position, target, rate)
     are not compared, as in conformance_over_uart.py.
@@ -51,8 +50,8 @@ def playable(vector):
         return f"longer than {LONGEST_MS} ms of virtual time (the CI share)"
     for step in vector["script"]:
         for key in step:
-            if key not in ("at_ms", "send", "press", "release", "estop", "expect", "expect_legacy",
-                           "expect_seed"):
+            if key not in ("at_ms", "send", "press", "release", "auto", "estop", "fault", "expect",
+                           "expect_legacy", "expect_seed"):
                 return f"uses '{key}'"
     return None
 
@@ -106,9 +105,9 @@ def script(vector, start_ms):
         at = f"at {round((start_ms + step['at_ms']) * 1000)}us"
         if "send" in step:
             lines += [f"{at} send {line}" for line in step["send"].split("\n")]
-        for key in ("press", "release"):
+        for key in ("press", "release", "auto", "fault"):
             if key in step:
-                motor, end = step[key]
+                motor, end = step[key]  # fault: motor and STATUS bits
                 lines.append(f"{at} {key} {motor} {end}")
         if "estop" in step:
             lines.append(f"{at} estop" + ("" if step["estop"] else " release"))
@@ -120,7 +119,7 @@ def expected(vector, key):
     expectation comes after the vector's last action (then nothing more may come)."""
     lines, last_expect, last_action = [], -1, -1
     for i, step in enumerate(vector["script"]):
-        if any(k in step for k in ("send", "press", "release", "estop")):
+        if any(k in step for k in ("send", "press", "release", "auto", "estop", "fault")):
             last_action = i
         if key in step.get("expect", {}):
             lines += step["expect"][key]

@@ -16,6 +16,7 @@
 #include <climits>
 #include <sstream>
 
+#include "hmc/emu_transport.h"
 #include "hmc/sim_transport.h"
 #include "hmc/transport.h"
 #include "transports.h"
@@ -202,10 +203,11 @@ Result<std::unique_ptr<Transport>> open_port(const std::string& name, const Port
                  "hmc ports lists the ports this machine has)"};
   }
   if (starts_with(name, "sim://")) return open_sim_port(name, options);
+  if (starts_with(name, "emu://")) return open_emu_port(name, options);
   if (starts_with(name, "tcp://")) return detail::open_tcp_port(name.substr(6), options);
   if (const size_t scheme = name.find("://"); scheme != std::string::npos) {
     return Error{"unknown kind of port '" + name.substr(0, scheme + 3) + "' in " + name +
-                 " (use a device such as /dev/ttyUSB0, tcp://HOST:PORT or sim://)"};
+                 " (use a device such as /dev/ttyUSB0, tcp://HOST:PORT, sim:// or emu://)"};
   }
   // A bare device name (ttyUSB0) means the device in /dev.
   std::string path = name;

@@ -21,6 +21,7 @@
 #include <string>
 #include <thread>
 
+#include "hmc/emu_transport.h"
 #include "hmc/port_list.h"
 #include "hmc/transport.h"
 
@@ -354,4 +355,37 @@ TEST_CASE("the port list") {
   hmc::PortInfo board2 = board;
   board2.name = "/dev/ttyUSB1";
   CHECK_FALSE(hmc::find_board_port({board, other, board2}).has_value());
+}
+
+TEST_CASE("parse_emu_url splits the image and the options") {
+  auto plain = hmc::parse_emu_url("emu://");
+  REQUIRE(plain.ok());
+  CHECK(plain->image.empty());
+  CHECK_FALSE(plain->fast);
+  auto full = hmc::parse_emu_url("emu:///opt/fw/hmc-firmware.elf?fast&nocrystal&axis=1:0:409600:12800&axis=2:0:1000:500"
+                                 "&control=127.0.0.1:4001");
+  REQUIRE(full.ok());
+  CHECK(full->image == "/opt/fw/hmc-firmware.elf");
+  CHECK(full->fast);
+  CHECK(full->no_crystal);
+  CHECK(full->axes == std::vector<std::string>{"1:0:409600:12800", "2:0:1000:500"});
+  CHECK(full->control == "127.0.0.1:4001");
+  auto relative = hmc::parse_emu_url("emu://build/x.elf");
+  REQUIRE(relative.ok());
+  CHECK(relative->image == "build/x.elf");
+  auto unknown = hmc::parse_emu_url("emu://?fast&slow");
+  REQUIRE_FALSE(unknown.ok());
+  CHECK_THAT(unknown.error().message, Catch::StartsWith("emu://?fast&slow: unknown option 'slow'"));
+  auto valued = hmc::parse_emu_url("emu://?fast=1");
+  REQUIRE_FALSE(valued.ok());
+  CHECK(valued.error().message == "emu://?fast=1: option 'fast' takes no value");
+  auto empty = hmc::parse_emu_url("emu://?axis=");
+  REQUIRE_FALSE(empty.ok());
+  CHECK(empty.error().message == "emu://?axis=: option 'axis' needs a value: axis=M:LOW:HIGH:START");
+}
+
+TEST_CASE("an emu:// port whose image or emulator is missing is refused before anything starts") {
+  auto image = hmc::open_port("emu:///nonexistent/hmc-firmware.elf");
+  REQUIRE_FALSE(image.ok());
+  CHECK(image.error().message == "emu:///nonexistent/hmc-firmware.elf: no firmware image '/nonexistent/hmc-firmware.elf' to run");
 }

@@ -3,6 +3,7 @@
 //
 // Names (docs/ports.md):
 //   sim://[NAME][?OPTION&...]  the simulated board, in this process (sim_transport.h)
+//   emu://[IMAGE][?OPTION&...] the firmware image on hmc-emu, a child process (emu_transport.h)
 //   tcp://HOST:PORT            a network serial bridge, or `hmc-sim --tcp`
 //   /dev/pts/N, or a link to one   a pseudo-terminal, through termios (`hmc-sim --pty`)
 //   anything else              a serial port through libserialport (/dev/ttyUSB0; ttyUSB0 means
@@ -35,7 +36,8 @@ class Transport {
   // Which board this is, for people: "serial /dev/ttyUSB0 at 115200 baud",
   // "tcp 127.0.0.1:4000", "simulated board sim://default".
   virtual std::string description() const = 0;
-  // True for the in-process simulated board.
+  // True for a board that exists only while this program has it open (sim://, emu://): nothing
+  // of it runs on when the program dies.
   virtual bool simulated() const { return false; }
   // True when the transport itself knows its board runs the seed firmware, which answers
   // nothing (the simulated board's ?seed); a real port never knows.
