@@ -727,6 +727,7 @@ size_t Board::run_file(const std::string& path, py::object progress, size_t star
     call([&](Session& s) -> int {
       motion::PlanOptions options;
       options.firmware = s.firmware() == Firmware::kV2 ? motion::TargetFirmware::kV2 : motion::TargetFirmware::kSeed;
+      options.budgets = s.step_budgets_in_force();
       if (at) {
         // Resuming: the plan counts from where the motors were when the file first started.
         for (uint32_t m = 1; m <= proto::kMotorCount; ++m) options.start_position[m - 1] = (*at)[m - 1];
