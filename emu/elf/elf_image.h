@@ -24,6 +24,9 @@ struct ElfImage {
   uint32_t lowest_address() const;
   // "name+0x12" for a code address, or "?" when no function holds it.
   std::string function_at(uint32_t address) const;
+  // The start addresses of the functions called `name`: the symbol as written, or demangled
+  // with or without its parameter list ("hmc::fw::Controller::poll").
+  std::vector<uint32_t> functions_named(const std::string& name) const;
 };
 
 // Loads `path`; on failure returns false with `error` saying what and where.

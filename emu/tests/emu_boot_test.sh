@@ -4,6 +4,7 @@
 # boot event (no emergency or limit event with nothing pressed), answers VER, and breaks no
 # chip rule (the IOBUS sampling rule of issue 17 defect 1; the DFLL48M start-up order of defect
 # 2 shows as a hang caught by --max-time). Bad input gives a clear error and its exit code.
+# --stats --count-calls counts the main loop's rounds.
 # Usage: emu_boot_test.sh HMC_EMU IMAGE_DIR
 # The images come from the firmware preset. Without them the test is skipped (exit 77), unless
 # CI is set: then their absence is a failure.
@@ -75,6 +76,19 @@ check_match "reset vector outside flash: message" "reset handler 0x000FFFFF, not
 timeout 60 "$emu" "$images/hmc-firmware.elf" --fast --max-time 0.05 >/dev/null 2>"$work/err" < <(sleep 30)
 check "max time: exit code" 6 $?
 check_match "max time: message" "--max-time reached at 0.050000 s of virtual time; PC in [a-z_:]" "$(cat "$work/err")"
+
+# --count-calls: the main loop's rounds (Controller::poll) and its cycles per round; an idle
+# board spends every cycle of the window in thread mode. A name the image lacks is a usage error.
+timeout 60 "$emu" "$images/hmc-firmware.elf" --fast --stats --count-calls hmc::fw::Controller::poll \
+  --measure-from 0.02 --max-time 0.05 >/dev/null 2>"$work/err" < <(sleep 30)
+check "count calls: exit code" 6 $?
+check_match "count calls: thread mode" "thread mode \(the main loop\): [0-9]+ cycles" "$(cat "$work/err")"
+check_match "count calls: calls" "hmc::fw::Controller::poll: [1-9][0-9]+ calls, [0-9.]+ thread-mode cycles per call" \
+  "$(cat "$work/err")"
+"$emu" "$images/hmc-firmware.elf" --stats --count-calls no_such_function 2>"$work/err" </dev/null
+check "count calls, unknown name: exit code" 2 $?
+check_match "count calls, unknown name: message" "--count-calls 'no_such_function': no function of that name" \
+  "$(cat "$work/err")"
 
 echo "$checks checks, $failures failures"
 [[ $failures -eq 0 ]]
