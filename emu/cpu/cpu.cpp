@@ -60,7 +60,8 @@ void Cpu::set_reg(int id, uint32_t value) { uc_reg_write(uc_, id, &value); }
 uint32_t Cpu::pc() const { return reg(UC_ARM_REG_PC); }
 
 std::string Cpu::where(uint32_t address) const {
-  return image_.function_at(address) + " (" + hex32(address) + ")";
+  const std::string line = image_.source_line(address);
+  return image_.function_at(address) + " (" + hex32(address) + (line.empty() ? "" : ", " + line) + ")";
 }
 
 // RAM is the engine's memory mapped from ram_: the exception frames and the DMAC's transfers

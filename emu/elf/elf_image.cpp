@@ -114,6 +114,7 @@ bool load_elf(const std::string& path, ElfImage& image, std::string& error) {
       }
     }
   }
+  image.lines = std::make_shared<const SourceLines>(path);
   return true;
 }
 

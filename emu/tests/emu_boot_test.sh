@@ -76,6 +76,13 @@ check_match "reset vector outside flash: message" "reset handler 0x000FFFFF, not
 timeout 60 "$emu" "$images/hmc-firmware.elf" --fast --max-time 0.05 >/dev/null 2>"$work/err" < <(sleep 30)
 check "max time: exit code" 6 $?
 check_match "max time: message" "--max-time reached at 0.050000 s of virtual time; PC in [a-z_:]" "$(cat "$work/err")"
+# The firmware preset compiles with -g: the message names the source line too; an image without
+# DWARF (stripped here) gets the function's name alone.
+check_match "max time: source line" "PC in [a-zA-Z_:]+.*\(0x[0-9A-F]{8}, /[^ ]+\.(cpp|h):[0-9]+\)$" "$(cat "$work/err")"
+arm-none-eabi-objcopy --strip-debug "$images/hmc-firmware.elf" "$work/stripped.elf"
+timeout 60 "$emu" "$work/stripped.elf" --fast --max-time 0.05 >/dev/null 2>"$work/err" < <(sleep 30)
+check "no DWARF: exit code" 6 $?
+check_match "no DWARF: the function alone" "PC in [a-zA-Z_:]+.*\(0x[0-9A-F]{8}\)$" "$(cat "$work/err")"
 
 # --count-calls: the main loop's rounds (Controller::poll) and its cycles per round; an idle
 # board spends every cycle of the window in thread mode. A name the image lacks is a usage error.
