@@ -700,6 +700,12 @@ std::optional<uint32_t> Board::protocol() const {
   return session_->version()->protocol;
 }
 
+std::pair<uint32_t, uint32_t> Board::step_budgets() {
+  SessionResult<StepBudgets> got = call([](Session& s) { return s.step_budgets(); });
+  if (!got) raise_session_error(got.error());
+  return {got.value().constant, got.value().ramping};
+}
+
 bool Board::simulated() const { return session_ && session_->simulated(); }
 bool Board::watchdog_armed() const { return session_ && session_->watchdog_armed(); }
 
