@@ -685,6 +685,18 @@ std::string last_reset_words(const Session& s) {
          ", predates it; protocol " + std::to_string(spec.since) + " reports it: reflash to see it)";
 }
 
+// "50000 steps/s together, 40000 while a motor ramps", or which part is assumed and why.
+std::string step_budget_words(const Session& s) {
+  const StepBudgets b = s.step_budgets_in_force();
+  std::string out = std::to_string(b.constant) + " steps/s for the moving motors together, " +
+                    std::to_string(b.ramping) + " while any of them ramps";
+  if (s.supports(proto::Feature::kStepBudgets)) return out;
+  const proto::FeatureSpec& spec = proto::feature_spec(proto::Feature::kStepBudgets);
+  return out + " (the ramping budget is not reported by the board's firmware, protocol " +
+         std::to_string(s.version() ? s.version()->protocol : 0) + "; protocol " + std::to_string(spec.since) +
+         " reports it: reflash to see it)";
+}
+
 void print_status(const Session& s) {
   const BoardModel& model = s.model();
   if (s.firmware() == Firmware::kSeed) {
@@ -692,6 +704,7 @@ void print_status(const Session& s) {
     return;
   }
   std::cout << "last reset: " << last_reset_words(s) << '\n';
+  std::cout << "step budget: " << step_budget_words(s) << '\n';
   std::cout << "emergency switch: " << (model.board.emergency ? "PRESSED" : "released") << '\n';
   if (const std::optional<WatchdogStatus>& w = model.watchdog) {
     std::cout << "link watchdog: " << (w->timeout_ms == 0 ? std::string("off") : std::to_string(w->timeout_ms) + " ms")

@@ -96,9 +96,9 @@ if port=$(tcp_port tcp) && cport=$(control_port tcp); then
   expect send-frame 0 '^ACK \(reply\): accepted$' -- "$hmc" -p "$board" send 'STX#3#SVM#1#135#136#ETX'
   expect send-notation 0 '^ACK \(reply\): accepted$' -- "$hmc" -p "$board" send '[#SVM#1#135]'
   expect send-words 0 '^ACK \(reply\): accepted$' -- "$hmc" send SVM 1 135 --port "$board"
-  expect send-query 0 '^VER \(reply\): protocol 6' -- "$hmc" -p "$board" send VER
+  expect send-query 0 '^VER \(reply\): protocol 7' -- "$hmc" -p "$board" send VER
   expect send-json 0 '^\{"reply":\{"name":"ACK"\}\}$' -- "$hmc" -p "$board" --json send SVM 2 90
-  expect send-board-line 0 '^board: tcp 127\.0\.0\.1:[0-9]+, firmware [0-9.]+, protocol 6$' -- \
+  expect send-board-line 0 '^board: tcp 127\.0\.0\.1:[0-9]+, firmware [0-9.]+, protocol 7$' -- \
     "$hmc" -p "$board" send SVM 1 90
   # Protocol 4: why the board last reset (hmc-sim: power-on), in words and in JSON.
   expect status-last-reset 0 '^last reset: power-on$' -- "$hmc" -p "$board" status

@@ -228,6 +228,10 @@ nlohmann::json model_to_json(const Session& s) {
   j["board"] = s.description();
   j["firmware"] = s.firmware() == Firmware::kV2 ? "v2" : "seed";
   j["version"] = s.version() ? board_frame_to_json(BoardFrame{*s.version()}) : nlohmann::json(nullptr);
+  const StepBudgets budgets = s.step_budgets_in_force();
+  j["step_budgets"] = {{"constant", budgets.constant},
+                       {"ramping", budgets.ramping},
+                       {"reported", s.supports(proto::Feature::kStepBudgets)}};
   j["reported"] = model.reported;
   j["emergency"] = model.board.emergency;
   j["watchdog"] = model.watchdog ? board_frame_to_json(BoardFrame{*model.watchdog}) : nlohmann::json(nullptr);

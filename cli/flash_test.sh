@@ -152,7 +152,7 @@ import struct
 def image(info):
     text = info.encode() + b'\0'
     return struct.pack('<II', 0x20007FF8, 0x2101) + bytes(0xB0 - 8) + text + bytes(512 - 0xB0 - len(text))
-seed = 'hmc-board:seed;protocol:6;firmware:100;guessed:PA05,PA06;'
+seed = 'hmc-board:seed;protocol:7;firmware:100;guessed:PA05,PA06;'
 open('board.bin', 'wb').write(image(seed))
 open('board-proto2.bin', 'wb').write(image('hmc-board:bench;protocol:2;firmware:100;guessed:PA05;'))
 # A UF2 file whose info text straddles its two blocks' payloads.
@@ -166,7 +166,7 @@ open('board.uf2', 'wb').write(blocks)
 PYEOF
 export HMC_SIM_STATE=$tmp/sim-state
 expect variant-named 0 "bossac -U -p /dev/ttyACM0 --offset=0x2000 -e -w -v -b -R $tmp/board.bin" \
-  "image for board variant 'seed', firmware 0\.1\.0, protocol 6$" -- "$hmc" flash board.bin -p /dev/ttyACM0 --no-touch -n
+  "image for board variant 'seed', firmware 0\.1\.0, protocol 7$" -- "$hmc" flash board.bin -p /dev/ttyACM0 --no-touch -n
 expect variant-guessed-pins 0 "bossac -U -p /dev/ttyACM0 --offset=0x2000 -e -w -v -b -R $tmp/board.bin" \
   "warning: 2 pins of variant 'seed' are guessed, not verified on a real board: PA05, PA06\. Check them" -- \
   "$hmc" flash board.bin -p /dev/ttyACM0 --no-touch -n
@@ -175,9 +175,9 @@ expect variant-unknown 0 "bossac -U -p /dev/ttyACM0 --offset=0x2000 -e -w -v -b 
 expect variant-uf2-across-blocks 0 "cp $tmp/board.uf2 $tmp/drive/board.uf2" "image for board variant 'seed'" -- \
   "$hmc" flash board.uf2 -m uf2 --drive drive -n
 expect dry-ver-port 0 "bossac -U -p /dev/ttyACM0 --offset=0x2000 -e -w -v -b -R $tmp/board.bin
-# ask VER on 'sim://?fast', expect firmware 0.1.0, protocol 6" '' -- \
+# ask VER on 'sim://?fast', expect firmware 0.1.0, protocol 7" '' -- \
   "$hmc" flash board.bin -p /dev/ttyACM0 --no-touch --ver-port 'sim://?fast' -n
-expect ver-confirmed 0 'fake openocd output' 'sim://\?fast answers VER: firmware 0\.1\.0, protocol 6$' -- \
+expect ver-confirmed 0 'fake openocd output' 'sim://\?fast answers VER: firmware 0\.1\.0, protocol 7$' -- \
   env PATH="$tmp/fakebin:$PATH" "$hmc" flash board.bin -p /dev/ttyACM0 --no-touch --ver-port 'sim://?fast'
 expect ver-confirmed-said 0 'fake openocd output' '^hmc flash: confirmed: the board runs the new firmware$' -- \
   env PATH="$tmp/fakebin:$PATH" "$hmc" flash board.bin -p /dev/ttyACM0 --no-touch --ver-port 'sim://?fast'

@@ -345,6 +345,7 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     std::unique_ptr<Session> session = connect(g, exit_code);
     if (!session) return;
     options.firmware = session->firmware() == Firmware::kV2 ? motion::TargetFirmware::kV2 : motion::TargetFirmware::kSeed;
+    options.budgets = session->step_budgets_in_force();
     if (!o->at.empty()) {
       // Positions given: the plan counts from them, not from where the motors are now.
     } else if (session->firmware() == Firmware::kV2) {

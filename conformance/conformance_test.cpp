@@ -146,8 +146,10 @@ std::vector<std::string> check_board_line(const json& vector, Tally& tally) {
     if (!again || *again != input) {
       problems.push_back(id + ": encode_board_frame gave " + (again ? *again : again.error().message));
     }
-    ++tally.board_written;
     const auto values = hmc::board_frame_values(*decoded);
+    // A frame as an older board writes it (VER before protocol 7): this firmware never does.
+    if (values && values->count != hmc::board_frame_spec(*decoded).value_count) return problems;
+    ++tally.board_written;
     CapturePort port;
     if (values) hmc::fw::write_frame(port, hmc::board_frame_id(*decoded), values->values.data(), mode);
     if (port.text == input + "\n") {

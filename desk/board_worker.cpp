@@ -314,6 +314,7 @@ void BoardWorker::open_file(const std::string& path) {
     motion::PlanOptions options;
     if (session_) {
       options.firmware = session_->firmware() == Firmware::kSeed ? motion::TargetFirmware::kSeed : motion::TargetFirmware::kV2;
+      options.budgets = session_->step_budgets_in_force();
       if (session_->firmware() == Firmware::kV2) {
         // Absolute moves start from where the board says each motor is.
         for (const motion::MotorConfig& mc : file->motors) {

@@ -69,6 +69,8 @@ struct Options {
   bool quiet = false;
   bool stats = false;
   double measure_from_s = 0;  // --stats counts from this virtual time on
+  std::string count_calls;     // --stats counts this function's calls
+  uint32_t count_calls_at = 0;  // its address, from the image's symbols
   // Start in the bootloader (docs/emu.md, "Flashing"): the native USB port, the UF2 drive.
   std::string usb_pty;
   std::string uf2_drive;
@@ -152,6 +154,7 @@ class Emulator {
     time_offset_ps_ += carried_ps;
     CpuOptions cpu_options;
     cpu_options.run_fault_handler = options_.run_fault_handler;
+    cpu_options.count_calls_at = options_.count_calls_at;
     for (const std::string& text : options_.axes) {
       const sim::AxisOption axis = *sim::parse_axis(text).value;  // checked by the option
       machine_.chip->board().set_axis(axis.motor - 1u, axis.axis);
@@ -169,6 +172,8 @@ class Emulator {
     uint64_t cycles = 0;
     uint64_t instructions = 0;
     uint64_t flash_wait_cycles = 0;
+    uint64_t thread_cycles = 0;
+    uint64_t calls = 0;
     std::map<unsigned, Cpu::HandlerFigures> handlers;
     uint64_t steps[3] = {};
   };
@@ -178,6 +183,8 @@ class Emulator {
     s.cycles = machine_.chip->cycles();
     s.instructions = machine_.cpu->instructions();
     s.flash_wait_cycles = machine_.cpu->flash_wait_cycles();
+    s.thread_cycles = machine_.cpu->thread_cycles();
+    s.calls = machine_.cpu->calls();
     s.handlers = machine_.cpu->handler_figures();
     for (unsigned m = 0; m < 3; ++m) s.steps[m] = machine_.chip->board().axis(m).steps;
     return s;
@@ -370,6 +377,18 @@ int run(const Options& options) {
               << "the bootloader)\n";
     return kExitImage;
   }
+  Options resolved = options;
+  if (!options.count_calls.empty()) {
+    const std::vector<uint32_t> found = image.functions_named(options.count_calls);
+    if (found.size() != 1) {
+      std::cerr << "hmc-emu: --count-calls '" << options.count_calls << "': "
+                << (found.empty() ? "no function of that name in the image's symbols"
+                                  : std::to_string(found.size()) + " functions of that name: give the symbol as written")
+                << '\n';
+      return kExitUsage;
+    }
+    resolved.count_calls_at = found[0];
+  }
   const sim::Notes notes = options.quiet ? nullptr : &std::cerr;
   sim::Result<std::unique_ptr<sim::Link>> link = open_link(options.pty, options.tcp, notes);
   if (!link) {
@@ -417,7 +436,7 @@ int run(const Options& options) {
     script = std::move(*parsed.value);
   }
 
-  Emulator emulator(options, image, **link.value, std::move(script), control.get());
+  Emulator emulator(resolved, image, **link.value, std::move(script), control.get());
   if (!emulator.power_on(Pm::kCausePowerOn, error)) {
     std::cerr << "hmc-emu: " << error << '\n';
     return kExitImage;
@@ -443,6 +462,15 @@ int run(const Options& options) {
                  to.instructions - from.instructions, to.flash_wait_cycles - from.flash_wait_cycles,
                  to.steps[0] - from.steps[0], to.steps[1] - from.steps[1],
                  to.steps[2] - from.steps[2]);
+    const uint64_t thread = to.thread_cycles - from.thread_cycles;
+    std::fprintf(stderr, "hmc-emu: thread mode (the main loop): %" PRIu64 " cycles (%.2f %% of the CPU)\n", thread,
+                 cycles != 0 ? 100.0 * static_cast<double>(thread) / static_cast<double>(cycles) : 0.0);
+    if (!options.count_calls.empty()) {
+      const uint64_t calls = to.calls - from.calls;
+      std::fprintf(stderr, "hmc-emu: %s: %" PRIu64 " calls, %.1f thread-mode cycles per call\n",
+                   options.count_calls.c_str(), calls,
+                   calls != 0 ? static_cast<double>(thread) / static_cast<double>(calls) : 0.0);
+    }
     for (const auto& [exception, figures] : to.handlers) {
       Cpu::HandlerFigures before;
       if (const auto it = from.handlers.find(exception); it != from.handlers.end()) before = it->second;
@@ -533,6 +561,10 @@ int main(int argc, char** argv) {
                  "reset, as a stalled main loop looks to the watchdog")
       ->check(CLI::PositiveNumber);
   app.add_flag("--stats", options.stats, "print virtual/wall time and cycles per handler at the end");
+  app.add_option("--count-calls", options.count_calls,
+                 "--stats counts this function's calls (a symbol, as written or demangled) and gives the "
+                 "main loop's cycles per call")
+      ->needs("--stats");
   app.add_option("--measure-from", options.measure_from_s,
                  "--stats counts cycles, handler entries and STEP edges from this virtual time (seconds) on")
       ->check(CLI::NonNegativeNumber);

@@ -607,8 +607,9 @@ class Harness {
         fail_unless(v != nullptr, "VER must be answered by VER");
         fail_unless(v->protocol == proto::kProtocolVersion && v->firmware == proto::kFirmwareVersion &&
                         v->legacy == legacy_ && v->line_max == proto::kLineMax &&
-                        v->max_rate == hmc::fw::kMaxStepRate && v->board == 322 && v->switch_mask == 3 &&
-                        v->checksum_mode == mode_,
+                        v->max_rate == hmc::fw::kMaxStepRate &&
+                        v->max_ramping_rate == std::optional<uint32_t>(proto::kMaxRampingStepRate) &&
+                        v->board == 322 && v->switch_mask == 3 && v->checksum_mode == mode_,
                     "VER does not describe this board (or the checksum mode in force)");
         break;
       }

@@ -698,6 +698,12 @@ std::optional<uint32_t> Board::protocol() const {
   return session_->version()->protocol;
 }
 
+std::pair<uint32_t, uint32_t> Board::step_budgets() {
+  SessionResult<StepBudgets> got = call([](Session& s) { return s.step_budgets(); });
+  if (!got) raise_session_error(got.error());
+  return {got.value().constant, got.value().ramping};
+}
+
 bool Board::simulated() const { return session_ && session_->simulated(); }
 bool Board::watchdog_armed() const { return session_ && session_->watchdog_armed(); }
 
@@ -725,6 +731,7 @@ size_t Board::run_file(const std::string& path, py::object progress, size_t star
     call([&](Session& s) -> int {
       motion::PlanOptions options;
       options.firmware = s.firmware() == Firmware::kV2 ? motion::TargetFirmware::kV2 : motion::TargetFirmware::kSeed;
+      options.budgets = s.step_budgets_in_force();
       if (at) {
         // Resuming: the plan counts from where the motors were when the file first started.
         for (uint32_t m = 1; m <= proto::kMotorCount; ++m) options.start_position[m - 1] = (*at)[m - 1];

@@ -20,6 +20,7 @@
 #include <set>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "hmc/axis_moves.h"
@@ -46,6 +47,8 @@ class Board {
   std::string description() const;
   std::string firmware() const;  // "0.1.0", or "seed"
   std::optional<uint32_t> protocol() const;
+  // (constant, ramping) steps/s as VER reports them (protocol 7); FirmwareTooOld before.
+  std::pair<uint32_t, uint32_t> step_budgets();
   bool simulated() const;
   bool watchdog_armed() const;
   py::object profile_axes() const;  // names of the profile's axes

@@ -389,6 +389,9 @@ void define_module(py::module_& m) {
       .def("home", &Board::home, py::arg("axis") = py::none(),
            "Homes an axis against its limit switch, or every motor with switches (None), one after another, as the "
            "profile's homing says. Raises MotionEndedEarly when the switch was not found.")
+      .def("step_budgets", &Board::step_budgets,
+           "The step-rate budgets of the moving motors together, (constant, ramping) steps/s, as the board reports "
+           "them (protocol 7); FirmwareTooOld before.")
       .def("zero", &Board::zero, py::arg("axis"), py::arg("position") = 0,
            "Tells the board the resting axis is at position (default 0) from now on (protocol 6).")
       .def("wait", &Board::wait, py::arg("axis") = py::none(), py::arg("timeout") = py::none(),

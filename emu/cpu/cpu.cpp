@@ -60,7 +60,8 @@ void Cpu::set_reg(int id, uint32_t value) { uc_reg_write(uc_, id, &value); }
 uint32_t Cpu::pc() const { return reg(UC_ARM_REG_PC); }
 
 std::string Cpu::where(uint32_t address) const {
-  return image_.function_at(address) + " (" + hex32(address) + ")";
+  const std::string line = image_.source_line(address);
+  return image_.function_at(address) + " (" + hex32(address) + (line.empty() ? "" : ", " + line) + ")";
 }
 
 // RAM is the engine's memory mapped from ram_: the exception frames and the DMAC's transfers
@@ -167,6 +168,7 @@ bool Cpu::reset(uint32_t vector_table, std::string& error) {
     return false;
   }
   active_.clear();
+  thread_since_ = chip_.cycles();
   chip_.scs().reset();
   chip_.scs().set_vtor(vector_table);
   set_reg(UC_ARM_REG_IPSR, 0);
@@ -262,6 +264,8 @@ void Cpu::on_block(uc_engine*, uint64_t address, uint32_t size, void* user) {
   }
   const BlockCost& cost = cpu.block_cost(address, size);
   cpu.instructions_ += cost.instructions;
+  // A call enters a function at a branch target, where a block starts.
+  if (address == (cpu.options_.count_calls_at & ~1u)) ++cpu.calls_;
   if (cpu.options_.cost == CostModel::kInstructions) {
     chip.charge_cycles(cost.instructions);
   } else {
@@ -397,6 +401,7 @@ void Cpu::enter_exception(unsigned exception) {
     return;
   }
   const uint64_t entered = chip_.cycles();
+  if (active_.empty()) thread_cycles_ += entered - thread_since_;
   uint64_t entry_waits = 0;
   if (options_.cost == CostModel::kCycles) {
     // The vector is read from flash (the NVM cache and its wait states, flash_waits).
@@ -462,6 +467,7 @@ void Cpu::account_return(const Active& done) {
   figures.cycles += chip_.cycles() - done.entered_cycles;
   figures.instructions += instructions_ - done.entered_instructions;
   figures.flash_wait_cycles += flash_wait_cycles_ - done.entered_waits;
+  if (active_.empty()) thread_since_ = chip_.cycles();
   chip_.scs().complete(done.exception);
 }
 

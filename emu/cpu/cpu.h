@@ -32,6 +32,9 @@ struct CpuOptions {
   // BKPT 0xAB is an ARM semihosting call (SYS_WRITE0, SYS_EXIT; the rest stop the emulator) and
   // not a breakpoint: bare-metal programs such as bench/qemu's print and exit this way.
   bool semihosting = false;
+  // Counts the blocks that start at this address (a function's entry: its calls; a call is a
+  // branch, and a block starts at every branch target); 0: none.
+  uint32_t count_calls_at = 0;
 };
 
 class Cpu : public Memory {
@@ -60,6 +63,13 @@ class Cpu : public Memory {
     uint64_t flash_wait_cycles = 0;  // of `cycles`
   };
   const std::map<unsigned, HandlerFigures>& handler_figures() const { return handler_figures_; }
+
+  // Cycles spent outside every exception handler (thread mode: the main loop), and the calls
+  // counted at CpuOptions::count_calls_at.
+  uint64_t thread_cycles() const {
+    return thread_cycles_ + (active_.empty() ? chip_.cycles() - thread_since_ : 0);
+  }
+  uint64_t calls() const { return calls_; }
 
   // How many times the engine was started (each chunk of instructions).
   uint64_t chunks() const { return chunks_; }
@@ -144,6 +154,9 @@ class Cpu : public Memory {
   };
   void account_return(const Active& done);
   std::vector<Active> active_;
+  uint64_t thread_cycles_ = 0;  // thread mode's cycles up to thread_since_
+  uint64_t thread_since_ = 0;   // when thread mode was last entered
+  uint64_t calls_ = 0;
   std::map<unsigned, HandlerFigures> handler_figures_;
   std::vector<uc_hook> hooks_;
   struct MmioRegion {

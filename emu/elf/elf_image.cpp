@@ -34,6 +34,20 @@ uint32_t ElfImage::lowest_address() const {
   return lowest;
 }
 
+std::vector<uint32_t> ElfImage::functions_named(const std::string& name) const {
+  std::vector<uint32_t> out;
+  for (const auto& [address, function] : functions) {
+    int status = 0;
+    char* readable = abi::__cxa_demangle(function.first.c_str(), nullptr, nullptr, &status);
+    const std::string demangled = status == 0 && readable != nullptr ? readable : function.first;
+    std::free(readable);
+    if (function.first == name || demangled == name || demangled.substr(0, demangled.find('(')) == name) {
+      out.push_back(address);
+    }
+  }
+  return out;
+}
+
 std::string ElfImage::function_at(uint32_t address) const {
   address &= ~1u;
   auto it = functions.upper_bound(address);
@@ -100,6 +114,7 @@ bool load_elf(const std::string& path, ElfImage& image, std::string& error) {
       }
     }
   }
+  image.lines = std::make_shared<const SourceLines>(path);
   return true;
 }
 

@@ -5,8 +5,11 @@
 
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
+
+#include "source_lines.h"
 
 namespace hmc::emu {
 
@@ -20,10 +23,17 @@ struct ElfImage {
   // Function symbols by start address: name and size.
   std::map<uint32_t, std::pair<std::string, uint32_t>> functions;
   uint32_t entry = 0;
+  // The DWARF line tables, when the ELF has them (source_lines.h).
+  std::shared_ptr<const SourceLines> lines;
 
   uint32_t lowest_address() const;
   // "name+0x12" for a code address, or "?" when no function holds it.
   std::string function_at(uint32_t address) const;
+  // The start addresses of the functions called `name`: the symbol as written, or demangled
+  // with or without its parameter list ("hmc::fw::Controller::poll").
+  std::vector<uint32_t> functions_named(const std::string& name) const;
+  // "/src/firmware/core/controller.cpp:95", or "" without line tables for the address.
+  std::string source_line(uint32_t address) const { return lines ? lines->at(address) : ""; }
 };
 
 // Loads `path`; on failure returns false with `error` saying what and where.

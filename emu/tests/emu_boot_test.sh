@@ -4,6 +4,7 @@
 # boot event (no emergency or limit event with nothing pressed), answers VER, and breaks no
 # chip rule (the IOBUS sampling rule of issue 17 defect 1; the DFLL48M start-up order of defect
 # 2 shows as a hang caught by --max-time). Bad input gives a clear error and its exit code.
+# --stats --count-calls counts the main loop's rounds.
 # Usage: emu_boot_test.sh HMC_EMU IMAGE_DIR
 # The images come from the firmware preset. Without them the test is skipped (exit 77), unless
 # CI is set: then their absence is a failure.
@@ -15,9 +16,9 @@ source "$(dirname "${BASH_SOURCE[0]}")/../../cli/sim_test_lib.sh"
 require_built "$images/hmc-firmware.elf" "$images/hmc-firmware-nobl.elf"
 
 ver='STX#1#VER#0#ETX'
-boot_out="STX#3#EVB#6#100#106#ETX
+boot_out="STX#3#EVB#7#100#107#ETX
 STX#6#EVR#1#0#0#0#0#1#ETX
-STX#9#VER#6#100#0#128#50000#322#3#0#127#ETX"
+STX#10#VER#7#100#0#128#50000#322#3#0#40000#192#ETX"
 for image in hmc-firmware hmc-firmware-nobl; do
   for clock in "" --no-crystal; do
     name="$image${clock:+ $clock}"
@@ -75,6 +76,26 @@ check_match "reset vector outside flash: message" "reset handler 0x000FFFFF, not
 timeout 60 "$emu" "$images/hmc-firmware.elf" --fast --max-time 0.05 >/dev/null 2>"$work/err" < <(sleep 30)
 check "max time: exit code" 6 $?
 check_match "max time: message" "--max-time reached at 0.050000 s of virtual time; PC in [a-z_:]" "$(cat "$work/err")"
+# The firmware preset compiles with -g: the message names the source line too; an image without
+# DWARF (stripped here) gets the function's name alone.
+check_match "max time: source line" "PC in [a-zA-Z_:]+.*\(0x[0-9A-F]{8}, /[^ ]+\.(cpp|h):[0-9]+\)$" "$(cat "$work/err")"
+arm-none-eabi-objcopy --strip-debug "$images/hmc-firmware.elf" "$work/stripped.elf"
+timeout 60 "$emu" "$work/stripped.elf" --fast --max-time 0.05 >/dev/null 2>"$work/err" < <(sleep 30)
+check "no DWARF: exit code" 6 $?
+check_match "no DWARF: the function alone" "PC in [a-zA-Z_:]+.*\(0x[0-9A-F]{8}\)$" "$(cat "$work/err")"
+
+# --count-calls: the main loop's rounds (Controller::poll) and its cycles per round; an idle
+# board spends every cycle of the window in thread mode. A name the image lacks is a usage error.
+timeout 60 "$emu" "$images/hmc-firmware.elf" --fast --stats --count-calls hmc::fw::Controller::poll \
+  --measure-from 0.02 --max-time 0.05 >/dev/null 2>"$work/err" < <(sleep 30)
+check "count calls: exit code" 6 $?
+check_match "count calls: thread mode" "thread mode \(the main loop\): [0-9]+ cycles" "$(cat "$work/err")"
+check_match "count calls: calls" "hmc::fw::Controller::poll: [1-9][0-9]+ calls, [0-9.]+ thread-mode cycles per call" \
+  "$(cat "$work/err")"
+"$emu" "$images/hmc-firmware.elf" --stats --count-calls no_such_function 2>"$work/err" </dev/null
+check "count calls, unknown name: exit code" 2 $?
+check_match "count calls, unknown name: message" "--count-calls 'no_such_function': no function of that name" \
+  "$(cat "$work/err")"
 
 echo "$checks checks, $failures failures"
 [[ $failures -eq 0 ]]

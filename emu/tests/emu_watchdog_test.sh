@@ -20,9 +20,9 @@ out=$(timeout 120 "$emu" "$image" --fast --quiet --watchdog-resets --stall-at 0.
         --script "$work/script" 2>"$work/err" </dev/null)
 check "stalled: exit 0" 0 $?
 check "stalled: booted twice, the second time reset by the watchdog (EVR and STR cause 4)" \
-  "STX#3#EVB#6#100#106#ETX
+  "STX#3#EVB#7#100#107#ETX
 STX#6#EVR#1#0#0#0#0#1#ETX
-STX#3#EVB#6#100#106#ETX
+STX#3#EVB#7#100#107#ETX
 STX#6#EVR#4#0#0#0#0#4#ETX
 STX#6#STR#4#0#0#0#0#4#ETX" "$out"
 
@@ -35,7 +35,7 @@ check "stalled, no resets: the message" 1 "$(grep -c 'watchdog expired: the main
 # Not stalled: the main loop kicks the watchdog; one boot, power-on.
 out=$(timeout 120 "$emu" "$image" --fast --quiet --watchdog-resets --max-time 10 \
         --script "$work/script" 2>/dev/null </dev/null)
-check "running: one boot, power-on" "STX#3#EVB#6#100#106#ETX
+check "running: one boot, power-on" "STX#3#EVB#7#100#107#ETX
 STX#6#EVR#1#0#0#0#0#1#ETX
 STX#6#STR#1#0#0#0#0#1#ETX" "$out"
 

@@ -9,7 +9,7 @@ another or a hang.
   2. Motor 3 running at 20 us a step, the whole step-rate budget (50 000 steps/s): 300 stops of
      the idle motors 1 and 2, each answered ACK.
   3. All three motors at 61 us a step (the budget shared; 60 us is over it): 100 LED lines, each answered ACK.
-  4. 100 VER lines at once: a VER reply (46 bytes) is longer than the line (16 bytes), so the
+  4. 100 VER lines at once: a VER reply (51 bytes) is longer than the line (16 bytes), so the
      board falls behind and its receive ring fills. Every answer must be the VER reply or
      NAK bad_byte (the line that lost bytes, marked where they were lost), never another
      refusal of a line spliced from two; after a blank line (which closes a line whose end was
@@ -25,7 +25,7 @@ import sys
 import time
 
 ACK = "STX#1#ACK#0#ETX"
-VER_REPLY = re.compile(r"STX#9#VER#\d+#\d+#0#128#\d+#\d+#\d+#\d+#\d+#ETX")
+VER_REPLY = re.compile(r"STX#10#VER#\d+#\d+#0#128#\d+#\d+#\d+#\d+#\d+#\d+#ETX")
 BAD_BYTE = re.compile(r"STX#4#NAK#2#\d+#\d+#\d+#ETX")
 LED_OFF = b"STX#6#LED#1#0#0#0#0#1#ETX\n"
 VER = b"STX#1#VER#0#ETX\n"

@@ -274,7 +274,10 @@ void Controller::answer_version() {
                              proto::kMotorCount * 100 + proto::kServoCount * 10 + proto::kStripCount,
                              (proto::motor_has_switches(1) ? 1u : 0u) | (proto::motor_has_switches(2) ? 2u : 0u) |
                                  (proto::motor_has_switches(3) ? 4u : 0u),
-                             static_cast<uint32_t>(parser_.checksum_mode())};
+                             static_cast<uint32_t>(parser_.checksum_mode()),
+                             proto::kMaxRampingStepRate};
+  static_assert(sizeof(values) / sizeof(values[0]) == proto::board_frame_spec(BoardFrameId::kVersion).value_count,
+                "one value per VER field");
   send(BoardFrameId::kVersion, values);
 }
 

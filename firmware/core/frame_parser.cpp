@@ -42,14 +42,14 @@ constexpr bool setting_values_follow_their_setting(const CommandSpec& command) {
 // Checks the command table against what this parser relies on.
 constexpr bool command_table_fits() {
   for (const CommandSpec& command : proto::kCommands) {
-    if (command.value_count > proto::kMaxValues || !action_precedes_its_dependents(command) ||
+    if (command.value_count > proto::kMaxCommandValues || !action_precedes_its_dependents(command) ||
         !setting_values_follow_their_setting(command)) {
       return false;
     }
   }
   return true;
 }
-static_assert(command_table_fits(), "commands fit kMaxValues and name their action first");
+static_assert(command_table_fits(), "commands fit kMaxCommandValues and name their action first");
 static_assert(proto::kLineMax + 1 < proto::kNoToken, "token indices and offsets fit a byte");
 
 // A token's place in the line: bytes [begin, end).

@@ -18,12 +18,14 @@ inline constexpr uint32_t kIntMax = 2147483647u;
 // Most digits a number may have (leading zeros count).
 inline constexpr uint32_t kMaxDigits = 10;
 // Most bytes on one line, its terminator excluded. The longest frame the grammar allows for a
-// command of kMaxValues values, every number written with kMaxDigits digits, is
-// 4 (STX#) + 11 (len#) + 4 (name#) + 9 * 11 (values#, checksum#) + 3 (ETX) = 121 bytes;
+// command of kMaxCommandValues values, every number written with kMaxDigits digits, is
+// 4 (STX#) + 11 (len#) + 4 (name#) + 6 * 11 (values#, checksum#) + 3 (ETX) = 88 bytes; the
+// board's longest reply (VER) is shorter, its fields' ranges bounding their digits.
 // 128 holds that with room for surrounding blanks and is one power of two of RAM.
 inline constexpr uint32_t kLineMax = 128;
-// Most values after the command name any command has (STM has 5).
-inline constexpr uint32_t kMaxValues = 8;
+// Most values after the name any command has (STM and LIM have 5), and any frame (VER has 9).
+inline constexpr uint32_t kMaxCommandValues = 5;
+inline constexpr uint32_t kMaxValues = 9;
 // The checksum field's largest value.
 inline constexpr uint32_t kChecksumMax = 255;
 // In CRC-16 mode (docs/protocol.md "CRC-16 mode") the checksum field holds 0..kCrcMax.
@@ -311,7 +313,7 @@ static_assert(commands_indexed_by_id(), "kCommands[i] must describe CommandId i"
 // Board -> host frames (protocol v2, docs/protocol.md "Replies" and "Protocol v2"). One reply
 // per non-blank line received; events (names starting with 'E') come unprompted between them.
 
-inline constexpr uint32_t kProtocolVersion = 6;
+inline constexpr uint32_t kProtocolVersion = 7;
 inline constexpr uint32_t kFirmwareVersion = 100;  // major·10000 + minor·100 + patch: 0.1.0
 
 // Why the board last reset (EVR, STR). The SAMD21 reads it from PM RCAUSE; kFault is a system
@@ -376,11 +378,14 @@ inline constexpr FieldSpec kVersionFields[] = {
     {"firmware", 0, kIntMax, 0, 0, 0, "major*10000 + minor*100 + patch"},
     {"legacy", 0, 1, 0, 0, 0, "1: seed rule [5] in force"},
     {"line_max", 1, 65535, 0, 0, 0, "longest line the board reads"},
-    {"max_rate", 1, kIntMax, 0, 0, 0, "step-rate budget, steps/s"},
+    {"max_rate", 1, kIntMax, 0, 0, 0, "step-rate budget of the moving motors together, steps/s"},
     {"board", 0, 999, 0, 0, 0, "motors*100 + servos*10 + strips"},
     {"switch_mask", 0, 7, 0, 0, 0, "bit m-1: motor m has limit switches"},
     {"checksum_mode", 0, 1, 0, 0, 0, "0 sum, 1 CRC-16"},
+    {"max_ramping_rate", 1, kIntMax, 0, 0, 0, "the same while any moving motor ramps, steps/s (protocol 7)"},
 };
+// A board older than protocol 7 (Feature::kStepBudgets) sends VER without max_ramping_rate.
+inline constexpr uint8_t kVersionValuesBefore7 = 8;
 inline constexpr FieldSpec kMotorStatusFields[] = {
     {"motor", 1, kMotorCount, 0, 0, 0, "stepper 1-3"},
     {"state", 0, 4, 0, 0, 0, "0 idle, 1 moving, 2 homing, 3 changing, 4 self-test"},
@@ -446,7 +451,7 @@ inline constexpr FieldSpec kDriverFaultFields[] = {
 inline constexpr BoardFrameSpec kBoardFrames[] = {
     {"ACK", BoardFrameId::kAck, 0, nullptr, "reply: the line was accepted"},
     {"NAK", BoardFrameId::kNak, 3, kNakFields, "reply: the line was refused"},
-    {"VER", BoardFrameId::kVersion, 8, kVersionFields, "reply to VER"},
+    {"VER", BoardFrameId::kVersion, 9, kVersionFields, "reply to VER (8 values before protocol 7)"},
     {"STA", BoardFrameId::kMotorStatus, 8, kMotorStatusFields, "reply to STA 1-3"},
     {"STB", BoardFrameId::kBoardStatus, 4, kBoardStatusFields, "reply to STA 4"},
     {"STL", BoardFrameId::kStripStatus, 5, kLedFields, "reply to STA 5-6"},
@@ -486,6 +491,7 @@ enum class Feature : uint8_t {
   kLinkWatchdog,  // WDG, STA 7 (STW), EVD how 6
   kResetCause,    // EVR after EVB at boot, STA 8 (STR)
   kSetPosition,   // POS
+  kStepBudgets,   // VER's max_ramping_rate
 };
 
 struct FeatureSpec {
@@ -499,8 +505,9 @@ struct FeatureSpec {
 inline constexpr FeatureSpec kFeatures[] = {
     {Feature::kLinkWatchdog, 3, "link_watchdog", "the link watchdog (WDG, STA 7)", kUnitWatchdog},
     {Feature::kResetCause, 4, "reset_cause", "the reset cause and fault record (EVR, STA 8)", kUnitReset},
-    // 5 is reserved for VER's step budgets (not yet in this firmware): no feature has it.
+    // 5 was reserved for VER's step budgets and never released: no board speaks it.
     {Feature::kSetPosition, 6, "set_position", "setting a motor's position (POS, hmc zero)", 0},
+    {Feature::kStepBudgets, 7, "step_budgets", "VER's ramping step budget (max_ramping_rate)", 0},
 };
 inline constexpr uint32_t kFeatureCount = sizeof(kFeatures) / sizeof(kFeatures[0]);
 
@@ -540,7 +547,7 @@ static_assert(kStepperFields[1].max == kActionHome, "STM's action field spans st
 static_assert(sizeof(kStepperFields) / sizeof(kStepperFields[0]) == 5, "STM has 5 values");
 static_assert(sizeof(kServoFields) / sizeof(kServoFields[0]) == 2, "SVM has 2 values");
 static_assert(sizeof(kLedFields) / sizeof(kLedFields[0]) == 5, "LED has 5 values");
-static_assert(4 + 11 + 4 + (kMaxValues + 1) * 11 + 3 <= kLineMax,
+static_assert(4 + 11 + 4 + (kMaxCommandValues + 1) * 11 + 3 <= kLineMax,
               "the line buffer holds the longest frame the grammar allows");
 
 }  // namespace hmc::proto

@@ -557,7 +557,7 @@ class Planner {
           sum += std::prev(after)->rate;
           ramping = ramping || std::prev(after)->ramping;
         }
-        const uint32_t limit = ramping ? kRampingBudget : kBudget;
+        const uint32_t limit = options_.budgets.when(ramping);
         if (sum <= limit || std::find(reported.begin(), reported.end(), r.action) != reported.end()) continue;
         reported.push_back(r.action);
         error(plan_.actions[r.action].where, "at most " + std::to_string(limit) + " steps/s in all",

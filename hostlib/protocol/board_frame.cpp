@@ -18,14 +18,15 @@ namespace {
 namespace g = grammar;
 
 // The field lists: plain numbers, flags (0/1), codes (enums), signed positions (sign and
-// magnitude, two values) and STA's packed flags.
+// magnitude, two values), STA's packed flags, and numbers a later protocol added at the end
+// (absent from an older board's frame: its shape's `older` form).
 template <typename IO> constexpr void fields(IO&, Ack&) {}
 template <typename IO> constexpr void fields(IO& io, Nak& f) {
   io.code(f.reason); io.number(f.token); io.number(f.offset);
 }
 template <typename IO> constexpr void fields(IO& io, Version& f) {
   io.number(f.protocol); io.number(f.firmware); io.flag(f.legacy); io.number(f.line_max); io.number(f.max_rate);
-  io.number(f.board); io.number(f.switch_mask); io.code(f.checksum_mode);
+  io.number(f.board); io.number(f.switch_mask); io.code(f.checksum_mode); io.later(f.max_ramping_rate);
 }
 template <typename IO> constexpr void fields(IO& io, MotorStatus& f) {
   io.number(f.motor); io.code(f.state); io.position(f.position); io.position(f.target); io.number(f.rate);
@@ -73,6 +74,7 @@ struct Counter {
   template <typename T> constexpr void code(T&) { ++count; }
   template <typename T> constexpr void position(T&) { count += 2; }
   template <typename T> constexpr void motor_flags(T&) { ++count; }
+  template <typename T> constexpr void later(T&) { ++count; }
 };
 
 template <typename T>
@@ -100,7 +102,7 @@ static_assert(proto::kMotorStatusFields[1].max == static_cast<uint32_t>(MotorSta
 // Values (already range-checked) into a typed frame.
 class Reader {
  public:
-  explicit Reader(const uint32_t* values) : values_(values) {}
+  Reader(const uint32_t* values, uint32_t count) : values_(values), count_(count) {}
   void number(uint32_t& x) { x = next(); }
   void flag(bool& x) { x = next() != 0; }
   template <typename E> void code(E& x) { x = static_cast<E>(next()); }
@@ -116,10 +118,12 @@ class Reader {
     s.endless = (flags & kFlagEndless) != 0;
     s.microstep = 1u << ((flags >> kFlagMicrostepShift) & 0xFu);
   }
+  void later(std::optional<uint32_t>& x) { x = at_ < count_ ? std::optional<uint32_t>(next()) : std::nullopt; }
 
  private:
   uint32_t next() { return values_[at_++]; }
   const uint32_t* values_;
+  uint32_t count_;
   std::size_t at_ = 0;
 };
 
@@ -153,6 +157,9 @@ class Writer {
     add((s.homed ? kFlagHomed : 0u) | ((s.switches & 3u) << kFlagSwitchShift) | (s.endless ? kFlagEndless : 0u) |
         ((log2 & 0xFu) << kFlagMicrostepShift));
   }
+  void later(const std::optional<uint32_t>& x) {
+    if (x) add(*x);
+  }
 
   const CommandValues& values() const { return out_; }
   const std::optional<Problem>& problem() const { return problem_; }
@@ -167,21 +174,25 @@ class Writer {
 };
 
 template <typename T>
-T read_frame(const uint32_t* values) {
+T read_frame(const uint32_t* values, uint32_t count) {
   T out{};
-  Reader reader(values);
+  Reader reader(values, count);
   fields(reader, out);
   return out;
 }
 
 template <std::size_t... I>
-BoardFrame make_frame(std::size_t index, const uint32_t* values, std::index_sequence<I...>) {
+BoardFrame make_frame(std::size_t index, const uint32_t* values, uint32_t count, std::index_sequence<I...>) {
   BoardFrame out;
-  ((index == I ? (void)(out = read_frame<std::variant_alternative_t<I, BoardFrame>>(values)) : void()), ...);
+  ((index == I ? (void)(out = read_frame<std::variant_alternative_t<I, BoardFrame>>(values, count)) : void()), ...);
   return out;
 }
 
-const g::Shape& shape_of(const BoardFrame& frame) { return g::board_frame_shapes().shapes[frame.index()]; }
+// The frame's shape for `count` values: its own, or its older form when a later field is absent.
+const g::Shape& shape_of(const BoardFrame& frame, uint32_t count) {
+  const g::Shape& shape = g::board_frame_shapes().shapes[frame.index()];
+  return shape.older && count == shape.older->value_count ? *shape.older : shape;
+}
 
 }  // namespace
 
@@ -197,10 +208,22 @@ Result<BoardFrame, Diagnostic> decode_board_frame(std::string_view line, proto::
   const g::ShapeTable& table = g::board_frame_shapes();
   auto frame = g::parse_frame(line, mode, table);
   if (!frame) return frame.error();
-  if (auto refusal = g::check_values(*frame->shape, frame->values.data(), frame->offsets.data())) {
+  const g::Shape& shape = *frame->shape;
+  if (auto refusal = g::check_values(shape, frame->values.data(), frame->offsets.data())) {
     return std::move(*refusal);
   }
-  return make_frame(table.index_of(*frame->shape), frame->values.data(),
+  // VER's first value says which form it must have: a board of protocol 7 reports both budgets.
+  const uint32_t budgets_since = proto::feature_spec(proto::Feature::kStepBudgets).since;
+  const g::Shape& version = table.shapes[static_cast<std::size_t>(proto::BoardFrameId::kVersion)];
+  if (&shape == version.older && frame->values[0] >= budgets_since) {
+    const uint32_t full = version.value_count;
+    return g::refuse(proto::Reason::kBadLength, proto::kTokenLength, line.find('#') + 1, "length",
+                     "VER of protocol " + std::to_string(frame->values[0]) + " has " + std::to_string(full + 1) +
+                         " fields (both step budgets, since protocol " + std::to_string(budgets_since) +
+                         ") but the length field says " + std::to_string(shape.value_count + 1),
+                     full + 1, shape.value_count + 1);
+  }
+  return make_frame(table.index_of(shape), frame->values.data(), shape.value_count,
                     std::make_index_sequence<std::variant_size_v<BoardFrame>>{});
 }
 
@@ -213,7 +236,7 @@ Result<CommandValues, Diagnostic> board_frame_values(const BoardFrame& frame) {
       },
       frame);
   const CommandValues& values = writer.values();
-  const g::Shape& shape = shape_of(frame);
+  const g::Shape& shape = shape_of(frame, values.count);
   const auto offsets = g::canonical_offsets(shape, values.values.data());
   if (const auto& problem = writer.problem()) {
     return g::refuse(proto::Reason::kOutOfRange, static_cast<int>(proto::kTokenFirstValue + problem->field),
@@ -227,7 +250,7 @@ Result<CommandValues, Diagnostic> board_frame_values(const BoardFrame& frame) {
 Result<std::string, Diagnostic> encode_board_frame(const BoardFrame& frame, proto::ChecksumMode mode) {
   auto values = board_frame_values(frame);
   if (!values) return values.error();
-  return g::write_frame(shape_of(frame), values->values.data(), mode);
+  return g::write_frame(shape_of(frame, values->count), values->values.data(), mode);
 }
 
 const char* motor_state_name(MotorState state) {
@@ -328,7 +351,9 @@ struct Describer {
     return "protocol " + std::to_string(v.protocol) + ", firmware " + firmware_version_text(v.firmware) + ", " +
            std::to_string(motors) + " motors, " + std::to_string(servos) + " servos, " + std::to_string(strips) +
            " LED strips, limit switches on " + motors_in_mask(v.switch_mask) + ", lines up to " +
-           std::to_string(v.line_max) + " bytes, up to " + std::to_string(v.max_rate) + " steps/s, checksums: " +
+           std::to_string(v.line_max) + " bytes, up to " + std::to_string(v.max_rate) + " steps/s" +
+           (v.max_ramping_rate ? " (" + std::to_string(*v.max_ramping_rate) + " while a motor ramps)" : std::string()) +
+           ", checksums: " +
            checksum_mode_text(v.checksum_mode) + (v.legacy ? ", legacy mode" : "");
   }
   std::string operator()(const MotorStatus& s) const {

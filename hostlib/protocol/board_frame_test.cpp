@@ -95,6 +95,49 @@ TEST_CASE("VER, STB, STL and SET in words") {
   CHECK(hmc::describe(*set) == "stepper 3: max_rate (fastest accepted move, steps/s) is 50000");
 }
 
+TEST_CASE("VER: both step budgets from protocol 7, eight values from an older board") {
+  const std::string v7 = "STX#10#VER#7#100#0#128#50000#322#3#0#40000#" +
+                         std::to_string((7 + 100 + 128 + 50000 + 322 + 3 + 40000) % 256) + "#ETX";
+  auto now = decode_board_frame(v7);
+  REQUIRE(now.ok());
+  const auto& ver = std::get<hmc::Version>(*now);
+  CHECK(ver.max_rate == 50000);
+  CHECK(ver.max_ramping_rate == std::optional<uint32_t>(40000));
+  CHECK(hmc::describe(*now).find("up to 50000 steps/s (40000 while a motor ramps)") != std::string::npos);
+  CHECK(hmc::encode_board_frame(*now).value() == v7);
+  CHECK(hmc::board_frame_to_json(*now)["max_ramping_rate"] == 40000);
+
+  const std::string v6 = "STX#9#VER#6#100#0#128#50000#322#3#0#" +
+                         std::to_string((6 + 100 + 128 + 50000 + 322 + 3) % 256) + "#ETX";
+  auto older = decode_board_frame(v6);
+  REQUIRE(older.ok());  // no decode error: the form a protocol-6 board sends
+  CHECK(std::get<hmc::Version>(*older).protocol == 6);
+  CHECK_FALSE(std::get<hmc::Version>(*older).max_ramping_rate.has_value());
+  CHECK(hmc::describe(*older).find("up to 50000 steps/s, checksums") != std::string::npos);
+  CHECK(hmc::encode_board_frame(*older).value() == v6);  // written back in its own form
+  CHECK(hmc::board_frame_values(*older).value().count == 8);
+  CHECK(hmc::board_frame_to_json(*older)["max_ramping_rate"].is_null());
+  // The same in CRC-16 mode.
+  auto crc = hmc::encode_board_frame(*older, ChecksumMode::kCrc16);
+  REQUIRE(crc.ok());
+  CHECK(decode_board_frame(*crc, ChecksumMode::kCrc16).value() == *older);
+
+  // A board of protocol 7 must report both.
+  const auto missing = refusal("STX#9#VER#7#100#0#128#50000#322#3#0#" +
+                               std::to_string((7 + 100 + 128 + 50000 + 322 + 3) % 256) + "#ETX");
+  CHECK(missing.reason == Reason::kBadLength);
+  CHECK(missing.token == 1);
+  CHECK(missing.offset == 4);
+  CHECK(missing.expected == 10);
+  CHECK(missing.found == 9);
+  CHECK(missing.message ==
+        "VER of protocol 7 has 10 fields (both step budgets, since protocol 7) but the length field says 9");
+  // Any other length is refused naming both forms.
+  const auto short_ver = refusal("STX#8#VER#6#100#0#128#50000#322#3#0#ETX");
+  CHECK(short_ver.reason == Reason::kBadLength);
+  CHECK(short_ver.message.find("VER has 10 fields (its name and 9 values; 9 from an older board)") != std::string::npos);
+}
+
 TEST_CASE("board frames follow the order of checks") {
   const auto unknown = refusal("STX#6#STM#1#1#128#1000#500#94#ETX");
   CHECK(unknown.reason == Reason::kUnknownCommand);

@@ -20,7 +20,8 @@ struct BoardFrameJson {
     return {{"protocol", v.protocol},   {"firmware", v.firmware},     {"legacy", v.legacy},
             {"line_max", v.line_max},   {"max_rate", v.max_rate},     {"board", v.board},
             {"switch_mask", v.switch_mask},
-            {"checksum_mode", v.checksum_mode == proto::ChecksumMode::kCrc16 ? "crc16" : "sum"}};
+            {"checksum_mode", v.checksum_mode == proto::ChecksumMode::kCrc16 ? "crc16" : "sum"},
+            {"max_ramping_rate", v.max_ramping_rate ? json(*v.max_ramping_rate) : json(nullptr)}};
   }
   json operator()(const MotorStatus& s) const {
     return {{"motor", s.motor}, {"state", motor_state_name(s.state)}, {"position", s.position},

@@ -26,12 +26,14 @@ constexpr uint32_t packed_name(std::string_view name) {
 
 // The grammar's view of one table entry; `action_field` is -1 for board frames.
 constexpr Shape shape_of(std::string_view name, uint32_t value_count, const proto::FieldSpec* fields,
-                         int action_field) {
-  Shape out{name, value_count, fields, action_field, packed_name(name), {}, {}, 0, false, {}, 0};
+                         int action_field, uint32_t index) {
+  Shape out{name, value_count, fields, action_field, packed_name(name), {}, {}, 0, false, {}, 0, index, nullptr};
   const auto put = [&out](char c) { out.head[out.head_size++] = c; };
   for (const char c : kStart) put(c);
   put('#');
-  put(static_cast<char>('0' + value_count + 1));  // a frame has at most 9 fields after the length
+  const uint32_t length = value_count + 1;  // at most kMaxValues + 1 = 10 fields
+  if (length >= 10) put(static_cast<char>('0' + length / 10));
+  put(static_cast<char>('0' + length % 10));
   put('#');
   for (const char c : name) put(c);
   put('#');
@@ -48,15 +50,24 @@ template <std::size_t N>
 constexpr std::array<Shape, N> shapes_of(const proto::CommandSpec (&specs)[N]) {
   std::array<Shape, N> out{};
   for (std::size_t i = 0; i < N; ++i) {
-    out[i] = shape_of(specs[i].name, specs[i].value_count, specs[i].fields, specs[i].action_field);
+    out[i] = shape_of(specs[i].name, specs[i].value_count, specs[i].fields, specs[i].action_field,
+                      static_cast<uint32_t>(i));
   }
   return out;
 }
 
+// VER as a board before protocol 7 (proto::Feature::kStepBudgets) sends it: no max_ramping_rate.
+constexpr auto kVersionIndex = static_cast<uint32_t>(proto::BoardFrameId::kVersion);
+constexpr Shape kVersionBefore7 = shape_of(proto::kBoardFrames[kVersionIndex].name, proto::kVersionValuesBefore7,
+                                           proto::kVersionFields, -1, kVersionIndex);
+
 template <std::size_t N>
 constexpr std::array<Shape, N> shapes_of(const proto::BoardFrameSpec (&specs)[N]) {
   std::array<Shape, N> out{};
-  for (std::size_t i = 0; i < N; ++i) out[i] = shape_of(specs[i].name, specs[i].value_count, specs[i].fields, -1);
+  for (std::size_t i = 0; i < N; ++i) {
+    out[i] = shape_of(specs[i].name, specs[i].value_count, specs[i].fields, -1, static_cast<uint32_t>(i));
+  }
+  out[kVersionIndex].older = &kVersionBefore7;
   return out;
 }
 
@@ -299,13 +310,15 @@ Result<Frame, Diagnostic> parse_frame(std::string_view line, proto::ChecksumMode
   }
   // 10. Name.
   if (!named) return unknown_name(table, name_text, tokens[proto::kTokenName].offset);
-  const Shape& shape = *named;
+  const Shape& shape = named->older && *len == named->older->value_count + 1u ? *named->older : *named;
   // 11. Length agrees with the frame's kind.
   if (*len != shape.value_count + 1u) {
     return refuse(Reason::kBadLength, proto::kTokenLength, len_token.offset, "length",
                   std::string(shape.name) + " has " + std::to_string(shape.value_count + 1) +
-                      " fields (its name and " + std::to_string(shape.value_count) +
-                      " values) but the length field says " + std::to_string(*len),
+                      " fields (its name and " + std::to_string(shape.value_count) + " values" +
+                      (shape.older ? "; " + std::to_string(shape.older->value_count + 1) + " from an older board"
+                                   : std::string()) +
+                      ") but the length field says " + std::to_string(*len),
                   shape.value_count + 1u, *len);
   }
   // 12. Value numbers.
@@ -412,10 +425,10 @@ const Shape* parse_canonical_frame(std::string_view line, proto::ChecksumMode mo
     return nullptr;
   }
   const char* const end = line.data() + line.size() - kEnd.size() - 1;  // the '#' before ETX
-  // "STX#<length>#<NAME>#": the name is the three bytes after "STX#" and a one-digit length (a
-  // frame has at most kMaxValues + 1 = 9 fields), and the whole head must be its shape's. The
-  // head is 8-12 bytes (static_assert above) and the line at least 12: two overlapping loads of
-  // eight compare it.
+  // "STX#<length>#<NAME>#": the name is the three bytes after "STX#" and a one-digit length,
+  // and the whole head must be its shape's (a frame of 10 fields, VER, or an older shape's
+  // length does not match: parse_frame() reads those). The head is 8-12 bytes (static_assert
+  // above) and the line at least 12: two overlapping loads of eight compare it.
   const Shape* shape = table.find(line.substr(kStart.size() + 3, 3));
   if (shape == nullptr || load8(line.data()) != load8(shape->head.data()) ||
       load8(line.data() + shape->head_size - 8) != load8(shape->head.data() + shape->head_size - 8)) {

@@ -36,6 +36,8 @@ struct Shape {
   // The frame up to its first value, "STX#6#STM#", which the writer copies in one go.
   std::array<char, 16> head;
   uint32_t head_size;
+  uint32_t index;      // its entry in its table: the CommandId or BoardFrameId
+  const Shape* older;  // the same frame with fewer values, as a board older than a feature sends it
 };
 
 // The frames one side may send, and how messages call them.
@@ -46,7 +48,7 @@ struct ShapeTable {
   const char* plural;  // "commands", "board frames"
 
   const Shape* find(std::string_view name) const;
-  std::size_t index_of(const Shape& shape) const { return static_cast<std::size_t>(&shape - shapes); }
+  std::size_t index_of(const Shape& shape) const { return shape.index; }
   std::string names() const;  // "STM, SVM and LED"
 };
 extern const ShapeTable kCommandTable;     // proto::kCommands, in CommandId order
@@ -76,7 +78,8 @@ Diagnostic value_not_a_number(const Shape& shape, uint32_t i, std::string_view t
 Diagnostic unknown_name(const ShapeTable& table, std::string_view name, std::size_t offset);
 
 // Steps 1-14: length, blanks, bytes, start, end, lengths, name, numbers, checksum. A line may
-// end in one LF, CRLF or CR, which is removed. A blank line is refused as bad_start.
+// end in one LF, CRLF or CR, which is removed. A blank line is refused as bad_start. A frame
+// with the value count of its shape's `older` form gets that shape.
 Result<Frame, Diagnostic> parse_frame(std::string_view line, proto::ChecksumMode mode, const ShapeTable& table);
 
 // Steps 1-16 in one pass for the common case: a canonical frame (nothing around it, no leading

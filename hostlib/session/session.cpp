@@ -186,7 +186,18 @@ std::string Session::description() const {
   return text;
 }
 
-uint32_t Session::max_rate() const { return version_ ? version_->max_rate : 50000; }
+SessionResult<StepBudgets> Session::step_budgets() const {
+  if (SessionResult<Done> ok = require(proto::Feature::kStepBudgets); !ok) return ok.error();
+  return StepBudgets{version_->max_rate, version_->max_ramping_rate.value_or(version_->max_rate)};
+}
+
+StepBudgets Session::step_budgets_in_force() const {
+  // Boards of protocols 2-6 report only max_rate; all of them ramped within 40 000 steps/s.
+  constexpr uint32_t kRampingBudgetBefore7 = 40000;
+  if (SessionResult<StepBudgets> reported = step_budgets()) return reported.value();
+  if (firmware_ != Firmware::kV2 || !version_) return StepBudgets{};
+  return StepBudgets{version_->max_rate, std::min(version_->max_rate, kRampingBudgetBefore7)};
+}
 
 bool Session::legacy_rules() const { return firmware_ == Firmware::kSeed || (version_ && version_->legacy); }
 

@@ -143,9 +143,10 @@ std::string Session::explain_rate_limit(const StepperMove& move) {
     ramping = ramping || setting(m, proto::kSettingAccel).value_or(0) != 0;
     others += ", " + motor_name(m) + " at " + std::to_string(model_.motor(m).rate) + " now";
   }
-  const uint32_t budget = proto::step_budget(ramping);
+  const StepBudgets budgets = step_budgets_in_force();
+  const uint32_t budget = budgets.when(ramping);
   const std::string which = ramping ? "its budget while any moving motor ramps, " + std::to_string(budget) +
-                                          " steps/s (" + std::to_string(proto::kMaxStepRate) + " at constant rate)"
+                                          " steps/s (" + std::to_string(budgets.constant) + " at constant rate)"
                                     : "its budget of " + std::to_string(budget) + " steps/s";
   if (others.empty()) {
     if (rate > budget) {

@@ -151,7 +151,10 @@ class OlderBoardTransport : public hmc::Transport {
     auto frame = hmc::decode_board_frame(line);
     if (!frame) return line + "\n";
     if (std::holds_alternative<hmc::ResetEvent>(*frame)) return "";
-    if (auto* v = std::get_if<hmc::Version>(&*frame)) v->protocol = protocol_;
+    if (auto* v = std::get_if<hmc::Version>(&*frame)) {
+      v->protocol = protocol_;
+      if (protocol_ < hmc::proto::feature_spec(hmc::proto::Feature::kStepBudgets).since) v->max_ramping_rate.reset();
+    }
     if (auto* b = std::get_if<hmc::Booted>(&*frame)) b->protocol = protocol_;
     return hmc::encode_board_frame(*frame).value() + "\n";
   }
@@ -222,6 +225,41 @@ TEST_CASE("the reset cause comes with the board's state; a board predating it is
       CHECK(raw->writes.size() == sent + (protocol == 2 ? 1 : 2));
     }
   }
+}
+
+TEST_CASE("both step budgets from a protocol-7 board; a protocol-6 board's VER of 8 values is no decode error") {
+  {
+    StateDir dir;
+    auto s = open("sim://?fast");
+    REQUIRE(s->supports(hmc::proto::Feature::kStepBudgets));
+    auto budgets = s->step_budgets();
+    REQUIRE(budgets.ok());
+    CHECK(budgets.value() == hmc::StepBudgets{hmc::proto::kMaxStepRate, hmc::proto::kMaxRampingStepRate});
+    CHECK(s->step_budgets_in_force() == budgets.value());
+  }
+  StateDir dir;
+  auto raw = new OlderBoardTransport(sim("sim://?fast"), 6);
+  auto opened = Session::open(std::unique_ptr<hmc::Transport>(raw), {});
+  REQUIRE(opened.ok());
+  auto& s = opened.value();
+  REQUIRE(s->version().has_value());
+  CHECK(s->version()->protocol == 6);
+  CHECK_FALSE(s->version()->max_ramping_rate.has_value());
+  CHECK(s->supports(hmc::proto::Feature::kSetPosition));
+  CHECK_FALSE(s->supports(hmc::proto::Feature::kStepBudgets));
+  auto budgets = s->step_budgets();
+  REQUIRE_FALSE(budgets.ok());
+  CHECK(budgets.error().kind == SessionError::Kind::kTooOld);
+  CHECK(budgets.error().message ==
+        "the board's firmware is too old for this: reflash (VER's ramping step budget (max_ramping_rate) needs "
+        "protocol 7; the board speaks protocol 6)");
+  // Moves are checked against VER's max_rate and the ramping budget of every protocol-6 firmware.
+  CHECK(s->step_budgets_in_force() == hmc::StepBudgets{hmc::proto::kMaxStepRate, 40000});
+  // The board's own VER line, 8 values, read as a reply.
+  auto ver = s->send_line("STX#1#VER#0#ETX");
+  REQUIRE(ver.ok());
+  REQUIRE(std::holds_alternative<hmc::Version>(ver.value()));
+  CHECK_FALSE(std::get<hmc::Version>(ver.value()).max_ramping_rate.has_value());
 }
 
 TEST_CASE("the end of a line begun before the port was opened is passed over, not taken for a broken link") {

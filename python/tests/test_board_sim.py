@@ -200,6 +200,7 @@ def test_send_and_a_refusal_by_the_board(sim_url):
     with hmc.open(sim_url()) as b:
         reply = b.send("VER")
         assert reply.name == "VER" and reply.values["protocol"] == b.protocol
+        assert b.step_budgets() == (reply.values["max_rate"], reply.values["max_ramping_rate"])
         assert b.send("STA 4").name == "STB"
         with pytest.raises(hmc.Refused) as nak:
             b.send("STX#6#STM#3#1#1#11#1000#238#ETX", raw=True)
@@ -214,6 +215,8 @@ def test_seed_firmware_is_too_old(sim_url):
         assert b.firmware == "seed" and b.protocol is None
         with pytest.raises(hmc.FirmwareTooOld, match="reflash"):
             b.zero(3)
+        with pytest.raises(hmc.FirmwareTooOld, match="max_ramping_rate.*needs protocol 7"):
+            b.step_budgets()
         with pytest.raises(hmc.Refused, match="acceleration"):
             b.move(3, steps=100, accel=1000)
         assert not b.status().reported

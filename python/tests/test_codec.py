@@ -121,3 +121,13 @@ def test_quantities():
         hmc.quantity("250 furlongs")
     with pytest.raises(hmc.InvalidCommand):
         hmc.mm(1).per_s().per_s().per_s()
+
+
+def test_decode_board_ver_of_both_protocols():
+    # Protocol 7 reports both step budgets; a protocol-6 board's VER has 8 values and is no error.
+    now = hmc.decode("STX#10#VER#7#100#0#128#50000#322#3#0#40000#192#ETX", board=True)
+    assert now.values["max_rate"] == 50000 and now.values["max_ramping_rate"] == 40000
+    older = hmc.decode("STX#9#VER#6#100#0#128#50000#322#3#0#127#ETX", board=True)
+    assert older.values["protocol"] == 6 and "max_ramping_rate" not in older.values
+    with pytest.raises(hmc.FrameError):
+        hmc.decode("STX#9#VER#7#100#0#128#50000#322#3#0#128#ETX", board=True)

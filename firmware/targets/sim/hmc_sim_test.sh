@@ -33,7 +33,7 @@ nak() { frame NAK "$@"; }
 vector() { "$session" "$src/conformance/vectors" "$1" "$2"; }
 out=$(timeout 20 "$sim" --fast --no-self-test <"$src/examples/spec-frames.txt")
 check "stdio exit code" 0 $?
-check_match "stdio boot event" '^STX#3#EVB#6#100#106#ETX$' "$out"
+check_match "stdio boot event" '^STX#3#EVB#7#100#107#ETX$' "$out"
 check_match "stdio boot event: reset cause power-on" '^STX#6#EVR#1#0#0#0#0#1#ETX$' "$out"
 out_sw=$(timeout 20 "$sim" --fast --no-self-test --reset-cause software <<<$'STX#2#STA#7#7#ETX\nSTX#2#STA#8#8#ETX')
 check_match "--reset-cause software: EVR" '^STX#6#EVR#5#0#0#0#0#5#ETX$' "$out_sw"

@@ -18,8 +18,8 @@ namespace {
 
 constexpr Ticks kMs = 48000;
 constexpr Ticks kByte = 4167;  // 10 bits at 115200 baud, rounded up to the tick
-// EVB, then EVR: protocol 6, firmware 0.1.0; reset by power-on. 50 bytes, 4.34 ms at 115200.
-const std::string kBootEvent = "STX#3#EVB#6#100#106#ETX\nSTX#6#EVR#1#0#0#0#0#1#ETX\n";
+// EVB, then EVR: protocol 7, firmware 0.1.0; reset by power-on. 50 bytes, 4.34 ms at 115200.
+const std::string kBootEvent = "STX#3#EVB#7#100#107#ETX\nSTX#6#EVR#1#0#0#0#0#1#ETX\n";
 constexpr Ticks kBootThrough = 5 * kMs;  // the boot events are through by then
 
 SimConfig quiet_config() {

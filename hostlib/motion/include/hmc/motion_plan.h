@@ -43,6 +43,7 @@
 #include <vector>
 
 #include "hmc/protocol_facts.h"
+#include "hmc/board_frame.h"
 #include "hmc/command.h"
 #include "hmc/motion_file.h"
 #include "hmc/result.h"
@@ -115,6 +116,7 @@ struct PlanOptions {
   // before a home need them.
   std::optional<int64_t> start_position[proto::kMotorCount];
   uint32_t baud = 115200;  // frame wire times, for when coordinated motors start
+  StepBudgets budgets;     // the board's (Session::step_budgets_in_force), else this firmware's
 };
 
 // Plans a validated file. Errors (an absolute move before the motor's position is known, a

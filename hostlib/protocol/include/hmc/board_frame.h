@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <variant>
@@ -39,15 +40,27 @@ struct Version {
   uint32_t firmware = 0;  // major*10000 + minor*100 + patch
   bool legacy = false;    // seed rule [5] in force
   uint32_t line_max = 0;
-  uint32_t max_rate = 0;  // step-rate budget, steps/s
+  uint32_t max_rate = 0;  // step-rate budget of the moving motors together, steps/s
   uint32_t board = 0;     // motors*100 + servos*10 + strips
   uint32_t switch_mask = 0;  // bit m-1: motor m has limit switches
   proto::ChecksumMode checksum_mode = proto::ChecksumMode::kSum;
+  // The budget while any moving motor ramps: protocol 7 (proto::Feature::kStepBudgets) on;
+  // nothing from an older board, whose VER has 8 values.
+  std::optional<uint32_t> max_ramping_rate;
   bool operator==(const Version& o) const {
     return protocol == o.protocol && firmware == o.firmware && legacy == o.legacy && line_max == o.line_max &&
            max_rate == o.max_rate && board == o.board && switch_mask == o.switch_mask &&
-           checksum_mode == o.checksum_mode;
+           checksum_mode == o.checksum_mode && max_ramping_rate == o.max_ramping_rate;
   }
+};
+
+// The step interrupt's budgets, summed over the moving motors (VER's max_rate and
+// max_ramping_rate); by default this firmware's own.
+struct StepBudgets {
+  uint32_t constant = proto::kMaxStepRate;
+  uint32_t ramping = proto::kMaxRampingStepRate;  // while any moving motor ramps
+  uint32_t when(bool any_ramps) const { return any_ramps ? ramping : constant; }
+  bool operator==(const StepBudgets& o) const { return constant == o.constant && ramping == o.ramping; }
 };
 
 enum class MotorState : uint8_t { kIdle, kMoving, kHoming, kChanging, kSelfTest };

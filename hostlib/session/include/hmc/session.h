@@ -142,8 +142,12 @@ class Session {
   const BoardModel& model() const { return model_; }
   // "simulated board sim://default (real time), firmware 1.0.0, protocol 2" and the like.
   std::string description() const;
-  // The rate budget of the board in steps/s (VER; the seed's figure is unknown, ours is used).
-  uint32_t max_rate() const;
+  // Both step-rate budgets as the board reports them (protocol 7, proto::Feature::kStepBudgets),
+  // or kTooOld.
+  SessionResult<StepBudgets> step_budgets() const;
+  // The budgets moves are checked against: the board's from protocol 7; before it VER's max_rate
+  // and the ramping budget every firmware of those protocols had; for the seed this firmware's.
+  StepBudgets step_budgets_in_force() const;
   bool legacy_rules() const;
 
   // Checks a command against the protocol and the model without sending it.
