@@ -716,7 +716,12 @@ py::object Board::profile_axes() const {
 size_t Board::run_file(const std::string& path, py::object progress, size_t start_at, const StartPositions& at) {
   if (start_at < 1) invalid("start_at counts from 1");
   motion::ReadOptions read;
-  if (profile_) read.profile = &*profile_;  // a file that names no profile and declares no motors is in the board's
+  if (profile_) {
+    // A file that names no profile and declares no motors is in the board's; one that names
+    // another profile is refused (the profile was chosen, not a default).
+    read.profile = &*profile_;
+    read.profile_chosen_by = "profile=";
+  }
   Result<motion::MotionFile, std::vector<motion::FileError>> file = motion::load_motion_file(path, read);
   Failure failure;
   std::optional<motion::RunReport> report;

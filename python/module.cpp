@@ -160,7 +160,10 @@ PlanRecord plan_file(const std::filesystem::path& file_path, const std::optional
     profile = std::move(*loaded);
   }
   motion::ReadOptions read;
-  if (profile) read.profile = &*profile;
+  if (profile) {
+    read.profile = &*profile;
+    read.profile_chosen_by = "profile=";
+  }
   Result<motion::MotionFile, std::vector<motion::FileError>> file = motion::load_motion_file(path, read);
   if (!file) raise_motion_file_error(file.error());
   warn_rounding(file->notes);
