@@ -168,7 +168,11 @@ whole=$(position3)
 off_grid
 "$hmc" --port "$port" run "$work/creep.json" >"$work/creep.out" 2>"$work/creep.err" &
 run_pid=$!
-sleep 1.0
+# Interrupted in the middle, once step 8 (of 21) has started, however long the start took.
+for _ in $(seq 200); do
+  grep -q '^step 8 of' "$work/creep.err" && break
+  sleep 0.05
+done
 kill -INT "$run_pid"
 wait "$run_pid"
 code=$?
