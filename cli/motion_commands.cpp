@@ -308,8 +308,8 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
           },
           "STEP"));
   cmd->add_option("--at", o->at,
-                  "with --from: where motors 1,2,3 were (steps; - unknown) when the file first started, as the "
-                  "interrupted run printed; they are first moved to where the plan has them at that step");
+                  "with --from: where motors 1,2,3 were (steps, a fraction as printed; - unknown) when the file first "
+                  "started, as the interrupted run printed; they are first moved to where the plan has them at that step");
   cmd->callback([&g, &exit_code, o] {
     motion::PlanOptions options;
     options.firmware = target_of(g);
