@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "exit_codes.h"
+#include "profile_choice.h"
 #include "hmc/codec.h"
 #include "hmc/command_json.h"
 #include "hmc/motion_file.h"
@@ -42,21 +43,42 @@ void print_errors(const std::vector<motion::FileError>& errors, bool json) {
   std::cerr << errors.size() << (errors.size() == 1 ? " error" : " errors") << "; nothing was sent\n";
 }
 
-// The file, validated and planned; prints the errors and returns nothing when it is not valid.
-// On failure `failure` is the exit code: a file that cannot be read is exit 3, a wrong one 1.
-std::optional<Plan> load_and_plan(const std::string& path, const motion::PlanOptions& options, bool json,
+// The file, read with the profile hmc uses (--profile, HMC_PROFILE or the default config: the
+// axes of a file that names none), validated and planned; prints the errors and returns nothing
+// when it is not valid. On failure `failure` is the exit code: a file that cannot be read is
+// exit 3, a wrong one (or a wrong profile) 1.
+std::optional<Plan> load_and_plan(const std::string& path, const motion::PlanOptions& options, const GlobalOptions& g,
                                   int& failure, motion::MotionFile* file_out = nullptr) {
-  auto file = motion::load_motion_file(path);
+  Result<const Profile*, int> in_use = use_profile(g);
+  if (!in_use) {
+    failure = in_use.error();
+    return std::nullopt;
+  }
+  motion::ReadOptions read;
+  read.profile = *in_use;
+  if (Result<ProfileChoice> choice = choose_profile(g); *in_use != nullptr && choice && choice->from != "default") {
+    read.profile_chosen_by = choice->from;
+  }
+  auto file = motion::load_motion_file(path, read);
   if (!file) {
-    print_errors(file.error(), json);
+    print_errors(file.error(), g.json);
     failure = std::ifstream(path) ? kExitInvalid : kExitIo;
     return std::nullopt;
   }
   // Values rounded to a whole step are no mistake, but the user should know where they are.
   for (const motion::FileError& n : file->notes) std::cerr << "note: " << n.text() << '\n';
+  // The file's own profile is the run's from here: its link settings and soft limits.
+  if (!file->profile.empty() && (*in_use == nullptr || (*in_use)->path != file->profile)) {
+    Result<Profile, ProfileError> own = load_profile(file->profile);
+    if (!own) {
+      failure = report_profile_error(g, own.error());
+      return std::nullopt;
+    }
+    adopt_profile(std::move(*own));
+  }
   auto plan = motion::plan_motion(*file, options);
   if (!plan) {
-    print_errors(plan.error(), json);
+    print_errors(plan.error(), g.json);
     failure = kExitInvalid;
     return std::nullopt;
   }
@@ -155,7 +177,7 @@ void add_check(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     motion::PlanOptions options;
     options.firmware = target_of(g);
     motion::MotionFile file;
-    std::optional<Plan> plan = load_and_plan(*path, options, g.json, exit_code, &file);
+    std::optional<Plan> plan = load_and_plan(*path, options, g, exit_code, &file);
     if (!plan) {
       return;
     }
@@ -186,7 +208,7 @@ void add_plan(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     options.firmware = target_of(g);
     options.baud = g.baud;
     motion::MotionFile file;
-    std::optional<Plan> plan = load_and_plan(o->path, options, g.json, exit_code, &file);
+    std::optional<Plan> plan = load_and_plan(o->path, options, g, exit_code, &file);
     if (!plan) {
       return;
     }
@@ -286,14 +308,14 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
           },
           "STEP"));
   cmd->add_option("--at", o->at,
-                  "with --from: where motors 1,2,3 were (steps; - unknown) when the file first started, as the "
-                  "interrupted run printed; they are first moved to where the plan has them at that step");
+                  "with --from: where motors 1,2,3 were (steps, a fraction as printed; - unknown) when the file first "
+                  "started, as the interrupted run printed; they are first moved to where the plan has them at that step");
   cmd->callback([&g, &exit_code, o] {
     motion::PlanOptions options;
     options.firmware = target_of(g);
     options.baud = g.baud;
     if (o->dry_run) {
-      std::optional<Plan> plan = load_and_plan(o->path, options, g.json, exit_code);
+      std::optional<Plan> plan = load_and_plan(o->path, options, g, exit_code);
       if (!plan) {
         return;
       }
@@ -310,7 +332,7 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     }
     // Validate before touching the port: a file with mistakes never reaches the board.
     motion::MotionFile file;
-    if (!load_and_plan(o->path, options, g.json, exit_code, &file)) {
+    if (!load_and_plan(o->path, options, g, exit_code, &file)) {
       return;
     }
     if (!o->at.empty()) {
@@ -328,9 +350,11 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
       for (uint32_t m = 1; problem.empty() && m <= items.size(); ++m) {
         const std::string& item = items[m - 1];
         if (item == "-") continue;
+        // Steps at the motor's microstep, as the interrupted run printed them: a fraction when the
+        // motor stood between two steps.
         char* end = nullptr;
-        const long long v = std::strtoll(item.c_str(), &end, 10);
-        if (item.empty() || *end != '\0') {
+        const double v = std::strtod(item.c_str(), &end);
+        if (item.empty() || *end != '\0' || !std::isfinite(v) || std::fabs(v) > 1e15) {
           problem = "--at: '" + item + "' (motor " + std::to_string(m) + ") is not a number of steps or -";
         } else {
           options.start_position[m - 1] = v;
@@ -346,16 +370,9 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
     if (!session) return;
     options.firmware = session->firmware() == Firmware::kV2 ? motion::TargetFirmware::kV2 : motion::TargetFirmware::kSeed;
     options.budgets = session->step_budgets_in_force();
-    if (!o->at.empty()) {
-      // Positions given: the plan counts from them, not from where the motors are now.
-    } else if (session->firmware() == Firmware::kV2) {
-      // Absolute moves start from where the board says each motor is.
-      for (const motion::MotorConfig& m : file.motors) {
-        const MotorStatus& status = session->model().motor(m.motor);
-        options.start_position[m.motor - 1] =
-            static_cast<int64_t>(std::llround(static_cast<double>(status.position) * m.microstep / 256.0));
-      }
-    }
+    // Absolute moves start from where the board says each motor is, unless --at gave where the
+    // motors were when the file first started.
+    if (o->at.empty()) motion::start_where_board_is(*session, file, options);
     auto plan = motion::plan_motion(file, options);
     if (!plan) {
       print_errors(plan.error(), g.json);
@@ -392,8 +409,8 @@ void add_run(CLI::App& app, const GlobalOptions& g, int& exit_code) {
         for (const MotorStatus& m : session->model().motors) std::cerr << "  motor " << m.motor << " " << position_words(m) << '\n';
         std::string origin;
         for (uint32_t m = 1; m <= proto::kMotorCount; ++m) {
-          const std::optional<int64_t>& p = options.start_position[m - 1];
-          origin += (m > 1 ? "," : "") + (p ? std::to_string(*p) : std::string("-"));
+          const std::optional<double>& p = options.start_position[m - 1];
+          origin += (m > 1 ? "," : "") + (p ? number_text(*p, 8) : std::string("-"));
         }
         std::cerr << "resume with: hmc run " << o->path << " --from " << report.stopped_at
                   << (session->firmware() == Firmware::kV2 ? " --at " + origin : std::string()) << '\n';

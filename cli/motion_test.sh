@@ -8,6 +8,9 @@ set -uo pipefail
 # shellcheck source=sim_test_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/sim_test_lib.sh"
 hmc_sim_src_args "$@"
+# Motion files read the profile hmc uses: none here.
+export XDG_CONFIG_HOME=$work/config
+unset HMC_PROFILE
 
 # --- check, plan, dry run ---------------------------------------------------------------------
 for f in "$src"/examples/*.json; do
@@ -137,6 +140,50 @@ code=$?
   fail "--at with 2 values: exit $code (want 2, before the port is opened): $out"
 out=$("$hmc" --port "$port" run "$work/two-glides.json" --at x,y,z 2>&1)
 [[ $? == 2 ]] || fail "--at x,y,z: want exit 2: $out"
+
+# --- a resumed run ends exactly where an uninterrupted one ends, where rounding matters ---------
+# Motor 3 starts 0.75 of a step off the file's whole steps (3 steps of 1/64 = 12/256); the file
+# moves it by 1 degree (26.667 steps) twenty times, then back by half a degree. The plan counts
+# from 1 and ends at 1 + 20 x 26.667 - 13.333 = 521; the motor stays 0.25 below: 520.75 steps of
+# 1/16, 8332/256 of a full step. (Before, a resume went back to whole steps counted from 0.)
+cat >"$work/creep.json" <<'EOF2'
+{
+  "hmc_motion": 1,
+  "motors": {"pan": {"motor": 3, "gear_ratio": 3}},
+  "steps": [
+    {"repeat": {"count": 20, "steps": [{"move": {"motor": "pan", "by": {"deg": 1}, "speed": {"deg_per_s": 10}}}]}},
+    {"move": {"motor": "pan", "by": {"deg": -0.5}, "speed": {"deg_per_s": 20}}}
+  ]
+}
+EOF2
+off_grid() {
+  "$hmc" --port "$port" zero 3 >/dev/null 2>&1 || fail "zero 3 failed"
+  "$hmc" --port "$port" move 3 3 --microstep 64 --wait >/dev/null 2>&1 || fail "move 3 3 --microstep 64 failed"
+}
+position3() { "$hmc" --port "$port" status --json 2>&1 | python3 -c 'import json,sys; print(json.load(sys.stdin)["motors"][2]["position"])'; }
+off_grid
+out=$("$hmc" --port "$port" run "$work/creep.json" 2>&1) || fail "uninterrupted creep: $out"
+whole=$(position3)
+[[ $whole == 8332 ]] || fail "uninterrupted creep ends at $whole/256 steps, want 8332 (520.75 steps of 1/16)"
+off_grid
+"$hmc" --port "$port" run "$work/creep.json" >"$work/creep.out" 2>"$work/creep.err" &
+run_pid=$!
+# Interrupted in the middle, once step 8 (of 21) has started, however long the start took.
+for _ in $(seq 200); do
+  grep -q '^step 8 of' "$work/creep.err" && break
+  sleep 0.05
+done
+kill -INT "$run_pid"
+wait "$run_pid"
+code=$?
+[[ $code == 130 ]] || fail "interrupted creep: exit $code, want 130: $(cat "$work/creep.err")"
+resume=$(grep -o 'resume with: hmc run .*' "$work/creep.err")
+[[ $resume == *" --at -,-,0.75" ]] || fail "interrupted creep: resume line is '$resume', want --at -,-,0.75"
+read -ra resume_args <<<"${resume#resume with: hmc run }"
+out=$("$hmc" --port "$port" run "${resume_args[@]}" 2>&1) || fail "resumed creep: $out"
+resumed=$(position3)
+[[ $resumed == "$whole" ]] ||
+  fail "resumed creep (${resume#resume with: }) ends at $resumed/256 steps, the uninterrupted run at $whole"
 stop_sim
 
 finish motion_test

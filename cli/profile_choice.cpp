@@ -13,6 +13,10 @@ namespace {
 
 bool given(const CLI::Option* option) { return option != nullptr && option->count() > 0; }
 
+// One run, one profile: loaded at its first use and kept (a motion file's may replace it).
+std::optional<Result<const Profile*, int>> g_loaded;
+std::optional<Profile> g_profile;
+
 }  // namespace
 
 Result<ProfileChoice> choose_profile(const GlobalOptions& o) { return find_profile(o.profile); }
@@ -35,27 +39,25 @@ int report_profile_error(const GlobalOptions& o, const ProfileError& error) {
 }
 
 Result<const Profile*, int> use_profile(const GlobalOptions& o) {
-  // One run, one profile: loaded at its first use and kept.
-  static std::optional<Result<const Profile*, int>> loaded;
-  static std::optional<Profile> profile;
-  if (loaded) return *loaded;
+  if (g_loaded) return *g_loaded;
   Result<ProfileChoice> choice = choose_profile(o);
-  if (!choice) {
-    loaded = Result<const Profile*, int>(static_cast<const Profile*>(nullptr));
-    return *loaded;  // no HOME and none named: no profile
-  }
-  if (!choice->exists && choice->from == "default") {
-    loaded = Result<const Profile*, int>(static_cast<const Profile*>(nullptr));
-    return *loaded;
+  // No HOME and none named, or no default file: no profile.
+  if (!choice || (!choice->exists && choice->from == "default")) {
+    g_loaded = Result<const Profile*, int>(static_cast<const Profile*>(nullptr));
+    return *g_loaded;
   }
   Result<Profile, ProfileError> read = load_profile(choice->path);
   if (!read) {
-    loaded = Result<const Profile*, int>(report_profile_error(o, read.error()));
-    return *loaded;
+    g_loaded = Result<const Profile*, int>(report_profile_error(o, read.error()));
+    return *g_loaded;
   }
-  profile = std::move(*read);
-  loaded = Result<const Profile*, int>(static_cast<const Profile*>(&*profile));
-  return *loaded;
+  adopt_profile(std::move(*read));
+  return *g_loaded;
+}
+
+void adopt_profile(Profile profile) {
+  g_profile = std::move(profile);
+  g_loaded = Result<const Profile*, int>(static_cast<const Profile*>(&*g_profile));
 }
 
 Result<GlobalOptions, int> with_profile_link(const GlobalOptions& o) {

@@ -20,6 +20,11 @@ Result<ProfileChoice> choose_profile(const GlobalOptions& options);
 // with --json) and gives the exit code: nothing is sent to a board.
 Result<const Profile*, int> use_profile(const GlobalOptions& options);
 
+// A motion file's own profile becomes the one in use for the rest of the run (the port, baud and
+// firmware it gives, the soft limits sent when the session opens). Motion files that name
+// another profile than one chosen with --profile or HMC_PROFILE are refused before this.
+void adopt_profile(Profile profile);
+
 // Prints a profile's mistakes ("file:line:col: message", then the count) and returns the exit code.
 int report_profile_error(const GlobalOptions& options, const ProfileError& error);
 

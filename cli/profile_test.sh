@@ -117,6 +117,34 @@ printf 'port = "sim://fromprofile?fast"\nbaud = 57600\n[axis.a]\nmotor = 1\nrota
 expect port-from-profile 0 'board: simulated board sim://fromprofile' -- "$hmc" --profile "$work/port.toml" status
 expect port-option-wins 0 'board: simulated board sim://other' -- "$hmc" --profile "$work/port.toml" --port 'sim://other?fast' status
 
+# --- motion files and the profile hmc uses -------------------------------------------------------
+# (the default profile is still the gantry's)
+printf '{"hmc_motion": 1, "steps": [{"move": {"motor": "slide", "by": {"mm": 10}}}]}\n' >"$work/bare.json"
+expect file-takes-profile 0 'bare.json: valid: 1 steps' -- "$hmc" "${slider[@]}" check "$work/bare.json"
+expect file-takes-default 1 "unknown motor 'slide' .*x, y, z" -- "$hmc" check "$work/bare.json"
+expect file-other-profile 1 "\\\$.profile: the file was written for the profile .*/camera-slider.toml, not for .*/pan-tilt-head.toml, which --profile chooses: give --profile the file's profile, or none" \
+  -- "$hmc" --profile "$src/examples/pan-tilt-head.toml" check "$src/examples/camera-slider-mm.json"
+expect file-other-env 1 'which HMC_PROFILE chooses' \
+  -- env HMC_PROFILE="$src/examples/pan-tilt-head.toml" "$hmc" check "$src/examples/camera-slider-mm.json"
+expect file-same-profile 0 'camera-slider-mm.json: valid' -- "$hmc" "${slider[@]}" check "$src/examples/camera-slider-mm.json"
+expect file-over-default 0 "note: .*\\\$.profile: the file's profile .*/camera-slider.toml is used, not the default .*/config.toml" \
+  -- "$hmc" check "$src/examples/camera-slider-mm.json"
+
+# A motion file's home applies the profile's homing, as `hmc home` does: pulled 2 mm off the
+# switch without a slow re-approach, the motor rests at 2 mm, and `to 10mm` counts from there.
+sed 's/^seek_speed = .*/&\npull_off = "2mm"/' "$src/examples/camera-slider.toml" >"$work/pull-off.toml"
+printf '{"hmc_motion": 1, "steps": [{"home": "slide"}]}\n' >"$work/home.json"
+printf '{"hmc_motion": 1, "steps": [{"home": "slide"}, {"move": {"motor": "slide", "to": {"mm": 10}}}]}\n' >"$work/home-to.json"
+pull_off=(--profile "$work/pull-off.toml" --port 'sim://h?fresh&fast')
+expect home-pull-off 0 '^motor 1: homed, at 160 steps of 1/16' -- "$hmc" "${pull_off[@]}" home slide
+expect file-home-pull-off 0 '^done: 1 steps; slide at 160 steps of 1/16' -- "$hmc" "${pull_off[@]}" run "$work/home.json"
+expect file-home-then-to 0 '^done: 2 steps; slide at 800 steps of 1/16' -- "$hmc" "${pull_off[@]}" run "$work/home-to.json"
+# The frames: the settings first (end, pull-off 160 steps, no re-approach), the seek at 20 mm/s,
+# then the soft limits (0-310 mm in 1/256 steps).
+for frame in 'SET#1#5#0#' 'SET#1#7#160#' 'SET#1#8#0#' 'STM#1#3#16#0#625#' 'LIM#1#0#0#0#396800#'; do
+  expect "file-home-frame-$frame" 0 "\\[1\\] +STX#[0-9]+#$frame" -- "$hmc" "${pull_off[@]}" run "$work/home.json" --dry-run
+done
+
 if ((failures > 0)); then
   echo "profile_test: $failures of $checks checks failed"
   exit 1

@@ -720,7 +720,12 @@ py::object Board::profile_axes() const {
 size_t Board::run_file(const std::string& path, py::object progress, size_t start_at, const StartPositions& at) {
   if (start_at < 1) invalid("start_at counts from 1");
   motion::ReadOptions read;
-  if (profile_) read.profile = &*profile_;  // a file that names no profile and declares no motors is in the board's
+  if (profile_) {
+    // A file that names no profile and declares no motors is in the board's; one that names
+    // another profile is refused (the profile was chosen, not a default).
+    read.profile = &*profile_;
+    read.profile_chosen_by = "profile=";
+  }
   Result<motion::MotionFile, std::vector<motion::FileError>> file = motion::load_motion_file(path, read);
   Failure failure;
   std::optional<motion::RunReport> report;
@@ -735,12 +740,9 @@ size_t Board::run_file(const std::string& path, py::object progress, size_t star
       if (at) {
         // Resuming: the plan counts from where the motors were when the file first started.
         for (uint32_t m = 1; m <= proto::kMotorCount; ++m) options.start_position[m - 1] = (*at)[m - 1];
-      } else if (s.firmware() == Firmware::kV2) {
+      } else {
         // Absolute moves start from where the board says each motor is.
-        for (const motion::MotorConfig& mc : file->motors) {
-          const MotorStatus& status = s.model().motor(mc.motor);
-          options.start_position[mc.motor - 1] = static_cast<int64_t>(std::llround(static_cast<double>(status.position) * mc.microstep / 256.0));
-        }
+        motion::start_where_board_is(s, *file, options);
       }
       auto plan = motion::plan_motion(*file, options);
       if (!plan) {

@@ -76,7 +76,7 @@ class Board {
 
   // `at`: where motors 1-3 were (steps; None unknown) when the file first started: the motors go
   // first to where the plan has them at `start_at` (as `hmc run --from K --at P1,P2,P3`).
-  using StartPositions = std::optional<std::array<std::optional<int64_t>, proto::kMotorCount>>;
+  using StartPositions = std::optional<std::array<std::optional<double>, proto::kMotorCount>>;
   size_t run_file(const std::string& path, py::object progress, size_t start_at, const StartPositions& at);
 
   // Stops the motors this board started (unless kept running), then closes the port.

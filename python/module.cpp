@@ -160,7 +160,10 @@ PlanRecord plan_file(const std::filesystem::path& file_path, const std::optional
     profile = std::move(*loaded);
   }
   motion::ReadOptions read;
-  if (profile) read.profile = &*profile;
+  if (profile) {
+    read.profile = &*profile;
+    read.profile_chosen_by = "profile=";
+  }
   Result<motion::MotionFile, std::vector<motion::FileError>> file = motion::load_motion_file(path, read);
   if (!file) raise_motion_file_error(file.error());
   warn_rounding(file->notes);
@@ -423,7 +426,7 @@ void define_module(py::module_& m) {
            py::arg("path"), py::kw_only(), py::arg("progress") = py::none(), py::arg("start_at") = 1,
            py::arg("at") = py::none(),
            "Validates, plans and runs a motion file, calling progress(Progress) as actions start and end; start_at "
-           "resumes at that action. at=(p1, p2, p3): where motors 1-3 were (steps, None unknown) when the file first "
+           "resumes at that action. at=(p1, p2, p3): where motors 1-3 were (steps, a fraction between two; None unknown) when the file first "
            "started, as an interrupted run's status said: the motors first go where the plan has them at start_at "
            "(hmc run --from K --at). Returns the actions completed.")
       .def("close", &Board::close, "Stops the motors this Board set moving (unless keep_running) and closes the port.")

@@ -13,35 +13,14 @@
 #include <cerrno>
 #include <cstring>
 
+#include "hmc/unique_fd.h"
+
 namespace hmc::grbl {
 namespace {
 
 constexpr size_t kMaxPending = 1 << 16;  // a sender that stops reading loses output beyond this
 
 Error os_error(const std::string& what) { return Error{what + ": " + std::strerror(errno)}; }
-
-class Fd {
- public:
-  explicit Fd(int fd = -1) : fd_(fd) {}
-  ~Fd() { reset(); }
-  Fd(Fd&& o) noexcept : fd_(o.fd_) { o.fd_ = -1; }
-  Fd& operator=(Fd&& o) noexcept {
-    reset();
-    fd_ = o.fd_;
-    o.fd_ = -1;
-    return *this;
-  }
-  Fd(const Fd&) = delete;
-  Fd& operator=(const Fd&) = delete;
-  int get() const { return fd_; }
-  void reset() {
-    if (fd_ >= 0) ::close(fd_);
-    fd_ = -1;
-  }
-
- private:
-  int fd_;
-};
 
 bool nonblocking(int fd) { return fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) | O_NONBLOCK) == 0; }
 
@@ -76,7 +55,7 @@ class PtySender final : public SenderLink {
  public:
   static constexpr int kRecheckMs = 20;
 
-  PtySender(Fd master, std::string path, std::string link)
+  PtySender(UniqueFd master, std::string path, std::string link)
       : master_(std::move(master)), path_(std::move(path)), link_(std::move(link)) {}
   ~PtySender() override {
     if (!link_.empty()) ::unlink(link_.c_str());
@@ -126,11 +105,11 @@ class PtySender final : public SenderLink {
     hung_up_ = true;
     in.disconnected = true;
     pending_.clear();
-    Fd other(::open(path_.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC));
+    UniqueFd other(::open(path_.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC));
     if (other.get() >= 0) tcflush(other.get(), TCIFLUSH);
   }
 
-  Fd master_;
+  UniqueFd master_;
   std::string path_;
   std::string link_;
   bool hung_up_ = true;
@@ -139,7 +118,7 @@ class PtySender final : public SenderLink {
 
 class TcpSender final : public SenderLink {
  public:
-  TcpSender(Fd listener, std::string address) : listener_(std::move(listener)), address_(std::move(address)) {}
+  TcpSender(UniqueFd listener, std::string address) : listener_(std::move(listener)), address_(std::move(address)) {}
 
   std::string address() const override { return address_; }
   bool connected() const override { return client_.get() >= 0; }
@@ -152,7 +131,7 @@ class TcpSender final : public SenderLink {
     if (::poll(&p, 1, static_cast<int>(timeout.count())) < 0 && errno != EINTR) return os_error("poll");
     if (!have) {
       if ((p.revents & POLLIN) != 0) {
-        Fd client(::accept4(listener_.get(), nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK));
+        UniqueFd client(::accept4(listener_.get(), nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK));
         if (client.get() >= 0) {
           const int one = 1;
           setsockopt(client.get(), IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
@@ -179,8 +158,8 @@ class TcpSender final : public SenderLink {
   }
 
  private:
-  Fd listener_;
-  Fd client_;
+  UniqueFd listener_;
+  UniqueFd client_;
   std::string address_;
   std::string pending_;
 };
@@ -188,7 +167,7 @@ class TcpSender final : public SenderLink {
 }  // namespace
 
 Result<std::unique_ptr<SenderLink>> open_pty_sender(const std::string& link) {
-  Fd master(posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC));
+  UniqueFd master(posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC));
   if (master.get() < 0) return os_error("cannot create a pseudo-terminal");
   if (grantpt(master.get()) != 0 || unlockpt(master.get()) != 0) return os_error("cannot unlock the pseudo-terminal");
   char path[128];
@@ -199,7 +178,7 @@ Result<std::unique_ptr<SenderLink>> open_pty_sender(const std::string& link) {
   if (tcsetattr(master.get(), TCSANOW, &modes) != 0) return os_error("tcsetattr");
   if (!nonblocking(master.get())) return os_error("fcntl");
   // Opened and closed once, the other side reports a hangup until a sender opens it.
-  if (Fd(::open(path, O_RDWR | O_NOCTTY | O_CLOEXEC)).get() < 0) return os_error(std::string("cannot open ") + path);
+  if (UniqueFd(::open(path, O_RDWR | O_NOCTTY | O_CLOEXEC)).get() < 0) return os_error(std::string("cannot open ") + path);
   if (!link.empty()) {
     ::unlink(link.c_str());
     if (::symlink(path, link.c_str()) != 0) return os_error("cannot make the link " + link);
@@ -222,7 +201,7 @@ Result<std::unique_ptr<SenderLink>> open_tcp_sender(const std::string& host_port
   if (inet_pton(AF_INET, host.empty() ? "127.0.0.1" : host.c_str(), &address.sin_addr) != 1) {
     return Error{"'" + host + "': not an IPv4 address"};
   }
-  Fd listener(::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0));
+  UniqueFd listener(::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0));
   if (listener.get() < 0) return os_error("socket");
   const int one = 1;
   setsockopt(listener.get(), SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);

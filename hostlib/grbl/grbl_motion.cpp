@@ -91,15 +91,11 @@ SessionResult<bool> FrontEnd::start(Action& action) {
 SessionResult<Done> FrontEnd::home_next() {
   const size_t a = homing_left_.front();
   const Axis& axis = *axes_[a].axis;
-  const HomingSetup setup = homing_setup(axis, StepperMove{axis.motor, proto::kActionHome, 0, 0, 0});
   // grbl owns the board while it runs: a pull-off or slow re-approach the profile leaves out is
   // set to 0 (none), not left as an earlier session set it.
-  std::vector<Command> commands;
-  for (const uint32_t setting : {proto::kSettingHomeEnd, proto::kSettingHomePullOff, proto::kSettingHomeLocate}) {
-    const auto given = std::find_if(setup.settings.begin(), setup.settings.end(),
-                                    [setting](const SetSetting& s) { return s.setting == setting; });
-    commands.emplace_back(given != setup.settings.end() ? *given : SetSetting{axis.motor, setting, 0});
-  }
+  const HomingSetup setup =
+      homing_setup(axis, StepperMove{axis.motor, proto::kActionHome, 0, 0, 0}, UnsetHoming::kNone);
+  std::vector<Command> commands(setup.settings.begin(), setup.settings.end());
   commands.emplace_back(setup.move);
   SessionResult<Session::StreamReport> sent = session_.stream(commands);
   if (!sent) return sent.error();

@@ -24,10 +24,6 @@
 namespace hmc {
 namespace detail {
 
-UniqueFd::~UniqueFd() {
-  if (fd_ >= 0) ::close(fd_);
-}
-
 std::string no_such_port_message(const std::string& name) {
   return "no such port " + name + " (hmc ports lists the ports this machine has)";
 }

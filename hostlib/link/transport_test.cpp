@@ -24,31 +24,17 @@
 #include "hmc/emu_transport.h"
 #include "hmc/port_list.h"
 #include "hmc/transport.h"
+#include "hmc/unique_fd.h"
 
 namespace {
 
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
-
-class Fd {
- public:
-  explicit Fd(int fd = -1) : fd_(fd) {}
-  ~Fd() { reset(); }
-  Fd(const Fd&) = delete;
-  Fd& operator=(const Fd&) = delete;
-  int get() const { return fd_; }
-  void reset() {
-    if (fd_ >= 0) ::close(fd_);
-    fd_ = -1;
-  }
-
- private:
-  int fd_;
-};
+using hmc::UniqueFd;
 
 // A socket bound to 127.0.0.1 on a free port; listening unless told otherwise.
 struct Listener {
-  Fd fd;
+  UniqueFd fd;
   int port = 0;
   explicit Listener(bool listening = true) : fd(::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0)) {
     REQUIRE(fd.get() >= 0);
@@ -98,7 +84,7 @@ long elapsed_ms(Clock::time_point since) {
 
 // A pseudo-terminal pair: we hold the master; the transport opens `slave`.
 struct PtyPair {
-  Fd master;
+  UniqueFd master;
   std::string slave;
   PtyPair() : master(::posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC)) {
     REQUIRE(master.get() >= 0);
@@ -137,7 +123,7 @@ TEST_CASE("tcp: bytes both ways, read timeout, and the peer closing") {
   hmc::Transport& transport = **port;
   CHECK(transport.description() == "tcp " + listener.address());
   CHECK_FALSE(transport.simulated());
-  Fd peer(::accept(listener.fd.get(), nullptr, nullptr));
+  UniqueFd peer(::accept(listener.fd.get(), nullptr, nullptr));
   REQUIRE(peer.get() >= 0);
 
   const std::string frame = "STX#6#STM#1#1#128#1000#500#94#ETX\n";
@@ -178,7 +164,7 @@ TEST_CASE("tcp: a write the peer never takes fails after the write timeout") {
   options.write_timeout = 200ms;
   auto port = hmc::open_port("tcp://" + listener.address(), options);
   REQUIRE(port.ok());
-  Fd peer(::accept(listener.fd.get(), nullptr, nullptr));
+  UniqueFd peer(::accept(listener.fd.get(), nullptr, nullptr));
   REQUIRE(peer.get() >= 0);
   const std::string flood(64u << 20, 'x');  // more than any socket buffers hold
   const auto start = Clock::now();
@@ -198,7 +184,7 @@ TEST_CASE("tcp: a signal ends a read's wait without an error") {
   Listener listener;
   auto port = hmc::open_port("tcp://" + listener.address());
   REQUIRE(port.ok());
-  Fd peer(::accept(listener.fd.get(), nullptr, nullptr));
+  UniqueFd peer(::accept(listener.fd.get(), nullptr, nullptr));
 
   struct sigaction action {};
   struct sigaction previous {};
@@ -312,7 +298,7 @@ TEST_CASE("opening fails with a message that says what to do") {
   SECTION("a file that is not a serial port") {
     TempDir dir;
     const std::string file = dir.path + "/not-a-port";
-    REQUIRE(Fd(::open(file.c_str(), O_CREAT | O_WRONLY | O_CLOEXEC, 0600)).get() >= 0);
+    REQUIRE(UniqueFd(::open(file.c_str(), O_CREAT | O_WRONLY | O_CLOEXEC, 0600)).get() >= 0);
     auto port = hmc::open_port(file);
     REQUIRE_FALSE(port.ok());
     CHECK_THAT(port.error().message, Catch::StartsWith(file + " is not a serial port"));
@@ -320,7 +306,7 @@ TEST_CASE("opening fails with a message that says what to do") {
   SECTION("a device we may not open") {
     TempDir dir;
     const std::string file = dir.path + "/forbidden";
-    REQUIRE(Fd(::open(file.c_str(), O_CREAT | O_WRONLY | O_CLOEXEC, 0600)).get() >= 0);
+    REQUIRE(UniqueFd(::open(file.c_str(), O_CREAT | O_WRONLY | O_CLOEXEC, 0600)).get() >= 0);
     REQUIRE(::chmod(file.c_str(), 0) == 0);
     auto port = hmc::open_port(file);
     if (::geteuid() == 0) {

@@ -13,6 +13,7 @@
 
 #include "hmc/result.h"
 #include "hmc/transport.h"
+#include "hmc/unique_fd.h"
 
 namespace hmc::detail {
 
@@ -24,25 +25,6 @@ TransportResult open_serial_port(const std::string& name, const std::string& pat
 TransportResult open_pty_port(const std::string& path, const std::string& device, const PortOptions& options);
 // `address` is what follows tcp://: HOST:PORT, or [IPV6]:PORT.
 TransportResult open_tcp_port(const std::string& address, const PortOptions& options);
-
-// Owns one descriptor.
-class UniqueFd {
- public:
-  UniqueFd() = default;
-  explicit UniqueFd(int fd) : fd_(fd) {}
-  ~UniqueFd();
-  UniqueFd(UniqueFd&& other) noexcept : fd_(std::exchange(other.fd_, -1)) {}
-  UniqueFd& operator=(UniqueFd&& other) noexcept {
-    std::swap(fd_, other.fd_);
-    return *this;
-  }
-  UniqueFd(const UniqueFd&) = delete;
-  UniqueFd& operator=(const UniqueFd&) = delete;
-  int get() const { return fd_; }
-
- private:
-  int fd_ = -1;
-};
 
 // The messages a person gets, each naming the port and saying what to do.
 std::string no_such_port_message(const std::string& name);

@@ -12,6 +12,8 @@
 #include <cerrno>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <optional>
 #include <system_error>
 #include <utility>
@@ -96,6 +98,9 @@ class Checker {
         if (loaded) {
           profile = std::move(*loaded);
           file_data_.profile = profile->path;
+          if (options_.profile != nullptr && !same_profile(profile->path, options_.profile->path)) {
+            differs_from_chosen(*named, p);
+          }
         } else {
           r_.bad(*named, p, "a machine profile without mistakes (docs/config.md)", loaded.error());
         }
@@ -112,8 +117,9 @@ class Checker {
       motors_.from_profile(*profile, r_.location(named->at, json::path_with_key(path, "profile")), file_data_.motors);
     } else if (named == nullptr && options_.profile != nullptr) {
       motors_.from_profile(*options_.profile, r_.location(root.at, path), file_data_.motors);
+      file_data_.profile = options_.profile->path;
     } else if (named == nullptr) {
-      r_.missing(root, path, "motors", "an object of 1 to 3 motors");
+      r_.missing(root, path, "motors", "an object of 1 to 3 motors, or a \"profile\"");
     }
 
     if (const Value* v = r_.get(root, "steps")) {
@@ -132,6 +138,34 @@ class Checker {
     } else {
       r_.missing(root, path, "steps", "a list of steps");
     }
+  }
+
+  // The file names a profile other than the program's: a mistake when the program's was chosen
+  // (the file was written for another rig), else a note that the file's is used.
+  void differs_from_chosen(const Value& named, const std::string& path) {
+    const std::string& mine = file_data_.profile;
+    const std::string& chosen = options_.profile->path;
+    if (options_.profile_chosen_by.empty()) {
+      r_.note(named, path, "the file's profile " + mine + " is used, not the default " + chosen);
+      return;
+    }
+    const std::string& by = options_.profile_chosen_by;
+    r_.add(named.at, path, "", "",
+           "the file was written for the profile " + mine + ", not for " + chosen + ", which " + by +
+               " chooses: give " + by + " the file's profile, or none");
+  }
+
+  // Two profile files are the same when they are one file, or their texts are equal (a copy).
+  static bool same_profile(const std::string& a, const std::string& b) {
+    std::error_code error;
+    if (std::filesystem::equivalent(a, b, error)) return true;
+    const auto text = [](const std::string& path) -> std::optional<std::string> {
+      std::ifstream in(path, std::ios::binary);
+      if (!in) return std::nullopt;
+      return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    };
+    const std::optional<std::string> x = text(a);
+    return x && x == text(b);
   }
 
   // The profile a file names, relative to the motion file's folder.

@@ -3,13 +3,17 @@
 // axes' names, units, directions and limits, roundings that do not add up, and planning's
 // mistakes reported with reading's.
 #include <catch2/catch.hpp>
+#include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "hmc/motion_file.h"
+#include "hmc/axis_moves.h"
 #include "hmc/motion_plan.h"
+#include "hmc/motion_runner.h"
 
 #if !defined(HMC_EXAMPLES_DIR) || !defined(HMC_DOCS_DIR)
 #error "HMC_EXAMPLES_DIR and HMC_DOCS_DIR must be defined by the build"
@@ -246,6 +250,146 @@ TEST_CASE("one pass: planning's mistakes come with reading's, as far as the brok
     REQUIRE(r.ok());
     CHECK_FALSE(plan_motion(*r, {}).ok());
   }
+}
+
+hmc::Profile example_profile(const std::string& name) {
+  auto p = hmc::load_profile(std::string(HMC_EXAMPLES_DIR) + "/" + name);
+  REQUIRE(p.ok());
+  return std::move(p).value();
+}
+
+TEST_CASE("a program's chosen profile: the axes of a file naming none; a file naming another is refused") {
+  const hmc::Profile slider_rig = example_profile("camera-slider.toml");
+  const hmc::Profile pan_tilt_rig = example_profile("pan-tilt-head.toml");
+  ReadOptions read;
+  read.profile = &slider_rig;
+  read.profile_chosen_by = "--profile";
+
+  SECTION("a file that names no profile and declares no motors moves the chosen profile's axes") {
+    auto f = parse_motion_file(R"({"hmc_motion": 1, "steps": [{"move": {"motor": "slide", "by": {"mm": 10}}}]})",
+                               "/nowhere/bare.json", read);
+    REQUIRE(f.ok());
+    CHECK(f->profile == slider_rig.path);
+    CHECK(move_of(f->steps[0]).distance == 800);
+  }
+  SECTION("a file that declares its motors keeps them") {
+    auto f = parse_motion_file(R"({"hmc_motion": 1, "motors": {"m": {"motor": 2}}, "steps": [{"home": "m"}]})",
+                               "/nowhere/own.json", read);
+    REQUIRE(f.ok());
+    CHECK(f->profile.empty());
+    CHECK(f->motors[0].name == "m");
+  }
+  SECTION("the same profile, named by the file, is no mistake") {
+    CHECK(parse_motion_file(slider(R"({"home": "slide"})"), kBeside, read).ok());
+  }
+  SECTION("another profile than the chosen one is a mistake at the file's \"profile\", naming both") {
+    read.profile = &pan_tilt_rig;
+    const auto r = parse_motion_file(slider(R"({"home": "slide"})"), kBeside, read);
+    REQUIRE_FALSE(r.ok());
+    REQUIRE(r.error().size() == 1);
+    CHECK(r.error()[0].where.path == "$.profile");
+    CHECK(r.error()[0].message == "the file was written for the profile " + slider_rig.path + ", not for " +
+                                      pan_tilt_rig.path + ", which --profile chooses: give --profile the file's "
+                                      "profile, or none");
+  }
+  SECTION("a profile chosen by default gives way to the file's, with a note") {
+    read.profile = &pan_tilt_rig;
+    read.profile_chosen_by.clear();
+    const auto r = parse_motion_file(slider(R"({"home": "slide"})"), kBeside, read);
+    REQUIRE(r.ok());
+    CHECK(r->motors[0].name == "slide");
+    REQUIRE(r->notes.size() == 1);
+    CHECK(r->notes[0].message == "the file's profile " + slider_rig.path + " is used, not the default " + pan_tilt_rig.path);
+  }
+  SECTION("a copy of the file's profile elsewhere is the same profile") {
+    const std::string copy = (std::filesystem::temp_directory_path() / "hmc-camera-slider-copy.toml").string();
+    {
+      std::ifstream in(slider_rig.path, std::ios::binary);
+      std::ofstream out(copy, std::ios::binary | std::ios::trunc);
+      out << in.rdbuf();
+    }
+    hmc::Profile elsewhere = slider_rig;
+    elsewhere.path = copy;
+    read.profile = &elsewhere;
+    CHECK(parse_motion_file(slider(R"({"home": "slide"})"), kBeside, read).ok());
+    std::filesystem::remove(copy);
+  }
+}
+
+TEST_CASE("a profile axis homes as its profile says: settings first, its soft limits after") {
+  // A belt axis (40 steps per mm) that seeks its reverse switch at 25 mm/s and pulls off 2 mm,
+  // without a slow re-approach: homing leaves it 2 mm off the switch.
+  ReadOptions read;
+  read.load_profile = [](const std::string&, const std::string&) -> hmc::Result<hmc::Profile, std::string> {
+    auto p = hmc::parse_profile(R"([axis.x]
+motor = 1
+microstep = 8
+pulley_teeth = 20
+belt_pitch = "2mm"
+limits = ["0mm", "300mm"]
+[axis.x.homing]
+seek_speed = "25mm/s"
+pull_off = "2mm"
+)",
+                                "rig.toml");
+    REQUIRE(p.ok());
+    return std::move(p).value();
+  };
+  auto read_file = parse_motion_file(R"({"hmc_motion": 1, "profile": "rig.toml", "steps": [{"home": "x"},
+    {"move": {"motor": "x", "to": {"mm": 10}}}]})",
+                                     kBeside, read);
+  REQUIRE(read_file.ok());
+  const MotionFile& f = *read_file;
+  const hmc::Axis& x = *f.motor("x")->axis;
+  auto plan = plan_motion(f, {});
+  REQUIRE(plan.ok());
+  const Action& home = plan->actions[0];
+  const hmc::HomingSetup setup = hmc::homing_setup(x, hmc::StepperMove{x.motor, hmc::proto::kActionHome, 0, 0, 0},
+                                                   hmc::UnsetHoming::kNone);
+  REQUIRE(home.setup.size() == setup.settings.size());
+  for (size_t i = 0; i < setup.settings.size(); ++i) CHECK(std::get<hmc::SetSetting>(home.setup[i]) == setup.settings[i]);
+  REQUIRE(home.commands.size() == 2);
+  CHECK(std::get<hmc::StepperMove>(home.commands[0]) == setup.move);
+  CHECK(std::get<hmc::SoftLimits>(home.commands[1]) == *hmc::soft_limits_command(x));
+  REQUIRE(setup.homed_position == 80);
+  REQUIRE(home.homed_at == std::vector<int64_t>{*setup.homed_position});
+  // The move to 10 mm counts from where homing left the motor.
+  const int64_t ten_mm = std::llround(10 * x.steps_per_unit());
+  int64_t moved = 0;
+  for (const Stage& s : plan->actions[1].stages[0]) moved += s.steps;
+  CHECK(moved == ten_mm - *setup.homed_position);
+  CHECK(plan->tracks[0].end_position == ten_mm);
+
+  SECTION("with the seed's firmware, which has no SET, homing settings are a mistake") {
+    PlanOptions seed;
+    seed.firmware = TargetFirmware::kSeed;
+    const auto r = plan_motion(f, seed);
+    REQUIRE_FALSE(r.ok());
+    CHECK(r.error()[0].message == "the homing settings of axis 'x' (docs/config.md) need SET, which the seed firmware does not know");
+  }
+}
+
+TEST_CASE("a motor standing between two steps: positions bring it nearest, a resume returns it exactly") {
+  // Motor 3 at 0.75 of a step (moved at a finer microstep): the plan counts from 1, and the motor
+  // stays 0.25 of a step below every position the plan gives it.
+  const MotionFile f = parse_ok(R"({"hmc_motion": 1, "motors": {"m": {"motor": 3, "gear_ratio": 3}}, "steps": [
+    {"move": {"motor": "m", "by": {"deg": 1}}},
+    {"move": {"motor": "m", "to": {"deg": 2}}}]})");
+  PlanOptions options;
+  options.start_position[2] = 0.75;
+  auto plan = plan_motion(f, options);
+  REQUIRE(plan.ok());
+  CHECK(plan->tracks[0].start_position == 1);
+  CHECK(plan->tracks[0].start_exact == 0.75);
+  // by 1 deg (26.667 steps): from 1 to the step nearest 27.667, 28; the motor at 27.75.
+  CHECK(plan->actions[0].stages[0][0].steps == 27);
+  // to 2 deg (53.333 steps): the motor can stand at 52.75 or 53.75; the nearer is the plan's 54,
+  // where rounding the position alone would give 53 (the motor at 52.75).
+  CHECK(plan->tracks[0].end_position == 54);
+  const auto at2 = planned_positions(*plan, 2);
+  REQUIRE(at2[2]);
+  CHECK(*at2[2] == 27.75);
+  CHECK(*planned_positions(*plan, 3)[2] == 53.75);
 }
 
 TEST_CASE("docs/motion-files.md's examples with comments are valid files beside the example profiles") {

@@ -236,6 +236,7 @@ void MotorTable::from_profile(const hmc::Profile& profile, const Location& where
     c.full_steps_per_rev = axis.steps_per_rev;
     c.microstep = axis.microstep;
     c.gear_ratio = axis.gear_ratio;
+    c.axis = axis;
     c.where = where;
     const double per_unit = axis.steps_per_unit();  // per mm or per degree
     if (!axis.rotary) e.steps_per_mm = per_unit;

@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "coordinated_move.h"
+#include "hmc/axis_moves.h"
 #include "hmc/codec.h"
 #include "motor_move.h"
 #include "plan_check.h"
@@ -49,8 +50,12 @@ class Planner {
   Planner(const MotionFile& file, const PlanOptions& options, const std::set<Place>* broken = nullptr)
       : file_(file), options_(options), broken_(broken) {
     for (uint32_t m = 0; m < proto::kMotorCount; ++m) {
-      motors_[m].position = options.start_position[m].value_or(0);
+      // A motor between two whole steps: the plan counts from the nearest, and the motor stays
+      // `offset` off every position the plan gives it, until it is homed.
+      const double start = options.start_position[m].value_or(0);
+      motors_[m].position = std::llround(start);
       motors_[m].exact = static_cast<double>(motors_[m].position);
+      motors_[m].offset = start - static_cast<double>(motors_[m].position);
       motors_[m].known = options.start_position[m].has_value();
     }
   }
@@ -78,6 +83,7 @@ class Planner {
   struct MotorState {
     int64_t position = 0;  // steps; when not known, counted from wherever the motor was
     double exact = 0;      // the position before rounding to a whole step: relative moves add to it
+    double offset = 0;     // how far the motor stands off `position` (a fraction of a step), until homed
     bool known = false;
     bool lost = false;     // checking: a broken step came since the position was last set
     double busy_until = 0;
@@ -160,6 +166,16 @@ class Planner {
     }
   }
 
+  // How a motor homes: plainly, or a profile axis as `hmc home` homes it (axis_moves.h), except
+  // that the file owns the board while it runs: what the profile leaves out is set to none (with
+  // our firmware), so that where homing ends is known.
+  HomingSetup homing_of(const MotorConfig& c) const {
+    const StepperMove plain{c.motor, proto::kActionHome, c.microstep, 0, 0};
+    if (!c.axis) return HomingSetup{{}, plain, 0};
+    const bool seed = options_.firmware == TargetFirmware::kSeed;
+    return homing_setup(*c.axis, plain, seed ? UnsetHoming::kKeep : UnsetHoming::kNone);
+  }
+
   // Homing: every motor must rest first (seed rule [2]); one motor after another.
   void home(const Step& step, const HomeStep& h, const std::string& pass) {
     std::string words = "home";
@@ -178,17 +194,35 @@ class Planner {
     Action& a = begin(ActionKind::kHome, step, words, pass, all_rest());
     a.estimated = true;
     for (const MotorConfig* c : configs) {
-      const Command cmd = StepperMove{c->motor, proto::kActionHome, c->microstep, 0, 0};
-      check(cmd, step.where);
+      const HomingSetup setup = homing_of(*c);
+      if (options_.firmware == TargetFirmware::kSeed && !setup.settings.empty()) {
+        error(step.where, "our firmware (its SET home settings)", "the seed firmware",
+              "the homing settings of axis '" + c->name + "' (docs/config.md) need SET, which the seed firmware does not know");
+      }
+      for (const SetSetting& set : setup.settings) {
+        check(set, step.where);
+        a.setup.push_back(set);
+      }
+      check(setup.move, step.where);
       a.commands_at_s.push_back(a.end_s);
-      a.commands.push_back(cmd);
+      a.commands.push_back(setup.move);
       a.motors.push_back(c->motor);
+      a.homed_at.push_back(setup.homed_position.value_or(0));
       a.end_s += kHomeEstimateS;
+      // The board enforces the profile's soft limits too, once the motor is homed (as `hmc home`).
+      if (const std::optional<SoftLimits> limits = c->axis && options_.firmware == TargetFirmware::kV2
+                                                       ? soft_limits_command(*c->axis)
+                                                       : std::nullopt) {
+        check(*limits, step.where);
+        a.commands_at_s.push_back(a.end_s);
+        a.commands.push_back(*limits);
+      }
     }
-    for (const MotorConfig* c : configs) {
-      MotorState& ms = motors_[c->motor - 1];
-      ms.position = 0;
-      ms.exact = 0;
+    for (size_t i = 0; i < configs.size(); ++i) {
+      MotorState& ms = motors_[configs[i]->motor - 1];
+      ms.position = a.homed_at[i];
+      ms.exact = static_cast<double>(ms.position);
+      ms.offset = 0;
       ms.known = true;
       ms.lost = false;
       ms.busy_until = a.end_s;
@@ -205,9 +239,10 @@ class Planner {
     MotorState& ms = motors_[it.config->motor - 1];
     // Where it ends: a relative move from the exact end of the one before, so that roundings to
     // whole steps never add up beyond half a step.
+    // A position: the whole step that brings the motor nearest it, counting its offset.
     const double exact = mv.exact.value_or(mv.distance);
-    it.exact_end = mv.absolute ? exact : ms.exact + exact;
-    const int64_t target = std::llround(mv.absolute ? mv.distance : it.exact_end);
+    it.exact_end = mv.absolute ? exact - ms.offset : ms.exact + exact;
+    const int64_t target = std::llround(it.exact_end);
     if (mv.absolute && !ms.known && ms.lost) {  // checking, after a broken step: it counts from here
       ms.position = target;
       ms.exact = it.exact_end;
@@ -265,8 +300,9 @@ class Planner {
           const MotorConfig* c = motor(name, step.where);
           if (c == nullptr || !proto::motor_has_switches(c->motor)) continue;
           MotorState& ms = motors_[c->motor - 1];
-          ms.position = 0;
-          ms.exact = 0;
+          ms.position = homing_of(*c).homed_position.value_or(0);
+          ms.exact = static_cast<double>(ms.position);
+          ms.offset = 0;
           ms.known = true;
           ms.lost = false;
         }
@@ -575,9 +611,10 @@ class Planner {
     t.name = c.name;
     t.motor = c.motor;
     t.microstep = c.microstep;
-    const std::optional<int64_t>& start = options_.start_position[c.motor - 1];
+    const std::optional<double>& start = options_.start_position[c.motor - 1];
     t.start_known = start.has_value();
-    t.start_position = start.value_or(0);
+    t.start_position = std::llround(start.value_or(0));
+    t.start_exact = start.value_or(0);
     t.end_known = ms.known;
     t.end_position = ms.position;
     auto add = [&t](VelocityPoint p) {

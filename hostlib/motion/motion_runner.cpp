@@ -2,6 +2,7 @@
 #include "hmc/motion_runner.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace hmc::motion {
 namespace {
@@ -30,22 +31,30 @@ SessionResult<Done> moves_completed(const Session& session, const std::vector<ui
 
 }  // namespace
 
-std::array<std::optional<int64_t>, proto::kMotorCount> planned_positions(const Plan& plan, size_t index) {
-  std::array<std::optional<int64_t>, proto::kMotorCount> at{};
-  for (const MotorTrack& t : plan.tracks) at[t.motor - 1] = t.start_position;
+std::array<std::optional<double>, proto::kMotorCount> planned_positions(const Plan& plan, size_t index) {
+  std::array<std::optional<double>, proto::kMotorCount> at{};
+  for (const MotorTrack& t : plan.tracks) at[t.motor - 1] = t.start_exact;
   for (const Action& a : plan.actions) {
     if (a.index >= index) break;
-    if (a.kind == ActionKind::kHome) {
-      for (const uint32_t m : a.motors) at[m - 1] = 0;
+    for (size_t i = 0; i < a.homed_at.size() && i < a.motors.size(); ++i) {
+      at[a.motors[i] - 1] = static_cast<double>(a.homed_at[i]);
     }
     for (const std::vector<Stage>& motor_stages : a.stages) {
       for (const Stage& s : motor_stages) {
-        std::optional<int64_t>& p = at[s.motor - 1];
-        if (p) *p += s.dir == proto::kActionForward ? int64_t{s.steps} : -int64_t{s.steps};
+        std::optional<double>& p = at[s.motor - 1];
+        if (p) *p += (s.dir == proto::kActionForward ? 1.0 : -1.0) * static_cast<double>(s.steps);
       }
     }
   }
   return at;
+}
+
+void start_where_board_is(const Session& session, const MotionFile& file, PlanOptions& options) {
+  if (session.firmware() != Firmware::kV2) return;
+  for (const MotorConfig& m : file.motors) {
+    options.start_position[m.motor - 1] = static_cast<double>(session.model().motor(m.motor).position) * m.microstep /
+                                          static_cast<double>(kUnitsPerStep);
+  }
 }
 
 MotionRunner::MotionRunner(Session& session, const Plan& plan) : session_(session), plan_(plan) {}
@@ -109,18 +118,31 @@ SessionResult<Done> MotionRunner::run_action(const Action& action) {
       if (!action.wait_for_motors) return Done{};
       if (SessionResult<Done> waited = wait_motors(action.motors); !waited) return waited;
       return moves_completed(session_, action.motors);
-    case ActionKind::kHome:
-      // One motor after another: homing needs every motor at rest.
+    case ActionKind::kHome: {
+      // One motor after another: homing needs every motor at rest. After each, its soft limits.
+      size_t homed = 0;
       for (const Command& c : action.commands) {
         if (SessionResult<BoardFrame> r = session_.execute(c); !r) return r.error();
-        const uint32_t m = std::get<StepperMove>(c).motor;
-        if (SessionResult<Done> homed = wait_motors({m}); !homed) return homed;
-        // The seed firmware reports nothing; ours says whether the switch was found.
-        if (session_.firmware() == Firmware::kV2 && !session_.model().motor(m).homed) {
-          return ended_early("motor " + std::to_string(m) + " not homed: " + not_homed_cause(session_.model()));
+        const auto* home = std::get_if<StepperMove>(&c);
+        if (home == nullptr) continue;
+        const uint32_t m = home->motor;
+        if (SessionResult<Done> waited = wait_motors({m}); !waited) return waited;
+        // The seed firmware reports nothing; ours says whether the switch was found, and where
+        // homing left the motor, which the rest of the plan counts from.
+        const size_t i = homed++;
+        if (session_.firmware() != Firmware::kV2) continue;
+        const MotorStatus& status = session_.model().motor(m);
+        if (!status.homed) return ended_early("motor " + std::to_string(m) + " not homed: " + not_homed_cause(session_.model()));
+        const int64_t planned = i < action.homed_at.size() ? action.homed_at[i] : 0;
+        if (static_cast<int64_t>(status.position) * home->microstep != planned * kUnitsPerStep) {
+          return ended_early("motor " + std::to_string(m) + " homed at " +
+                             steps_text(static_cast<int64_t>(status.position) * home->microstep) + " steps of 1/" +
+                             std::to_string(home->microstep) + ", where the plan has " + std::to_string(planned) +
+                             ": the board's home_pull_off or home_locate_us (hmc set) moved it off the switch");
         }
       }
       return Done{};
+    }
     case ActionKind::kStop:
       for (const Command& c : action.commands) {
         if (const auto* stop = std::get_if<StepperMove>(&c)) queued_[stop->motor - 1].clear();
@@ -204,16 +226,19 @@ SessionResult<Done> MotionRunner::wait_until(Clock::time_point when) {
   return waited;
 }
 
-SessionResult<Done> MotionRunner::return_to(const std::array<std::optional<int64_t>, proto::kMotorCount>& positions) {
+SessionResult<Done> MotionRunner::return_to(const std::array<std::optional<double>, proto::kMotorCount>& positions) {
   if (session_.firmware() != Firmware::kV2) return Done{};  // the seed reports no positions
   if (SessionResult<Done> fresh = session_.refresh(); !fresh) return fresh;
   std::vector<uint32_t> moving;
   for (const MotorTrack& t : plan_.tracks) {
-    const std::optional<int64_t>& target = positions[t.motor - 1];
+    const std::optional<double>& target = positions[t.motor - 1];
     if (!target) continue;
-    const MotorStatus& m = session_.model().motor(t.motor);
-    const int64_t now = m.position * t.microstep / kUnitsPerStep;
-    const int64_t delta = *target - now;
+    // In the board's 1/256 steps, where a fraction of a step is whole: the motor goes back exactly
+    // where it was, unless it was since moved by a fraction of another microstep (then nearest).
+    const double units_per_step = static_cast<double>(kUnitsPerStep) / t.microstep;
+    const double away = (*target * units_per_step - static_cast<double>(session_.model().motor(t.motor).position)) /
+                        units_per_step;
+    const int64_t delta = std::llround(away);
     if (delta == 0) continue;
     if (moving.empty()) emit(RunEvent::Kind::kReturning, nullptr);
     const StepperMove move{t.motor, delta > 0 ? proto::kActionForward : proto::kActionReverse, t.microstep,

@@ -123,23 +123,34 @@ Result<UnitMove> unit_move(const Axis& axis, const MotorStatus& motor, const Uni
   return out;
 }
 
-HomingSetup homing_setup(const Axis& axis, StepperMove move) {
+HomingSetup homing_setup(const Axis& axis, StepperMove move, UnsetHoming unset) {
   HomingSetup setup;
-  if (!axis.homing) {
+  if (!axis.homing && unset == UnsetHoming::kKeep) {
     setup.move = move;
     return setup;
   }
-  const AxisHoming& h = *axis.homing;
+  const AxisHoming h = axis.homing.value_or(AxisHoming{});
   const double per_unit = axis.steps_per_unit();
   const auto delay_of = [per_unit](double speed) { return static_cast<uint32_t>(std::llround(1e6 / (speed * per_unit))); };
   if (move.microstep == 0) move.microstep = axis.microstep;
   if (move.delay_us == 0 && h.seek_speed) move.delay_us = delay_of(*h.seek_speed);
   setup.settings.push_back(SetSetting{axis.motor, proto::kSettingHomeEnd, h.end});
-  if (h.pull_off) {
-    setup.settings.push_back(
-        SetSetting{axis.motor, proto::kSettingHomePullOff, static_cast<uint32_t>(std::llround(*h.pull_off * per_unit))});
+  const bool none = unset == UnsetHoming::kNone;
+  const std::optional<uint32_t> pull_off =
+      h.pull_off ? std::optional<uint32_t>(static_cast<uint32_t>(std::llround(*h.pull_off * per_unit)))
+                 : none ? std::optional<uint32_t>(0) : std::nullopt;
+  const std::optional<uint32_t> locate = h.locate_speed ? std::optional<uint32_t>(delay_of(*h.locate_speed))
+                                         : none         ? std::optional<uint32_t>(0)
+                                                        : std::nullopt;
+  if (pull_off) setup.settings.push_back(SetSetting{axis.motor, proto::kSettingHomePullOff, *pull_off});
+  if (locate) setup.settings.push_back(SetSetting{axis.motor, proto::kSettingHomeLocate, *locate});
+  // Zeroed at the switch; a pull-off then backs away from it, toward the other end, and a slow
+  // re-approach zeroes it at the switch again (docs/protocol.md, SET home_pull_off).
+  if (pull_off && *pull_off == 0) {
+    setup.homed_position = 0;
+  } else if (pull_off && locate) {
+    setup.homed_position = *locate == 0 ? (h.end == 0 ? int64_t{*pull_off} : -int64_t{*pull_off}) : 0;
   }
-  if (h.locate_speed) setup.settings.push_back(SetSetting{axis.motor, proto::kSettingHomeLocate, delay_of(*h.locate_speed)});
   setup.move = move;
   return setup;
 }

@@ -117,6 +117,26 @@ TEST_CASE("homing as the profile says, and a motor without a profile axis") {
   REQUIRE(setup.settings.size() == 2);
   CHECK(setup.settings[1].setting == proto::kSettingHomePullOff);
   CHECK(setup.settings[1].value == 160);
+  CHECK_FALSE(setup.homed_position);  // the board's re-approach setting decides: kept as it is
+
+  SECTION("a program that owns the board sets what the profile leaves out to none, so it knows where homing ends") {
+    const HomingSetup owned = homing_setup(slider(), StepperMove{1, proto::kActionHome, 0, 0, 0}, UnsetHoming::kNone);
+    REQUIRE(owned.settings.size() == 3);
+    CHECK(owned.settings[2].setting == proto::kSettingHomeLocate);
+    CHECK(owned.settings[2].value == 0);
+    CHECK(owned.homed_position == 160);  // pulled 2 mm off the reverse switch, not re-approached
+    Axis forward = slider();
+    forward.homing->end = 1;
+    CHECK(homing_setup(forward, StepperMove{1, proto::kActionHome, 0, 0, 0}, UnsetHoming::kNone).homed_position == -160);
+    forward.homing->locate_speed = 1;
+    CHECK(homing_setup(forward, StepperMove{1, proto::kActionHome, 0, 0, 0}).homed_position == 0);
+    Axis bare = slider();
+    bare.homing.reset();
+    CHECK(homing_setup(bare, StepperMove{1, proto::kActionHome, 0, 0, 0}).settings.empty());
+    const HomingSetup none = homing_setup(bare, StepperMove{1, proto::kActionHome, 0, 0, 0}, UnsetHoming::kNone);
+    CHECK(none.settings.size() == 3);
+    CHECK(none.homed_position == 0);
+  }
   const Axis plain = plain_motor_axis(3, 8);
   CHECK(plain.rotary);
   CHECK(plain.steps_per_unit() == Approx(200.0 * 8 / 360));

@@ -365,3 +365,6 @@ def test_a_motion_file_in_the_boards_profile(sim_url, examples, tmp_path):
         with pytest.warns(hmc.RoundingWarning):
             assert b.run_file(glide) == 2
         assert b.status().motors[0].position == 988
+    # A file written for another rig is refused in the profile given, naming both.
+    with pytest.raises(hmc.MotionFileError, match="written for the profile .*camera-slider.toml, not for .*pan-tilt-head.toml"):
+        hmc.check(os.path.join(examples, "camera-slider-mm.json"), profile=os.path.join(examples, "pan-tilt-head.toml"))

@@ -17,32 +17,14 @@
 #include <optional>
 #include <utility>
 
+#include "hmc/unique_fd.h"
+
 namespace hmc::sim {
 namespace {
 
 constexpr size_t kReadChunk = 4096;
 
 std::string os_error(const std::string& what) { return what + ": " + strerror(errno); }
-
-// Owns one descriptor.
-class Fd {
- public:
-  Fd() = default;
-  explicit Fd(int fd) : fd_(fd) {}
-  ~Fd() {
-    if (fd_ >= 0) close(fd_);
-  }
-  Fd(Fd&& other) noexcept : fd_(std::exchange(other.fd_, -1)) {}
-  Fd& operator=(Fd&& other) noexcept {
-    std::swap(fd_, other.fd_);
-    return *this;
-  }
-  int get() const { return fd_; }
-  int release() { return std::exchange(fd_, -1); }
-
- private:
-  int fd_ = -1;
-};
 
 bool set_nonblocking(int fd) {
   const int flags = fcntl(fd, F_GETFL);
@@ -92,7 +74,7 @@ std::string endpoint_text(const sockaddr* address, socklen_t length) {
 }
 
 struct Listener {
-  Fd fd;
+  UniqueFd fd;
   std::string address;  // tcp://HOST:PORT with the port actually bound
 };
 
@@ -108,7 +90,7 @@ Result<Listener> listen_tcp(const std::string& host, uint16_t port) {
   }
   std::string error = "no address for '" + host + "'";
   for (const addrinfo* a = found; a != nullptr; a = a->ai_next) {
-    Fd fd(socket(a->ai_family, a->ai_socktype | SOCK_NONBLOCK | SOCK_CLOEXEC, a->ai_protocol));
+    UniqueFd fd(socket(a->ai_family, a->ai_socktype | SOCK_NONBLOCK | SOCK_CLOEXEC, a->ai_protocol));
     if (fd.get() < 0) {
       error = os_error("socket");
       continue;
@@ -132,13 +114,13 @@ Result<Listener> listen_tcp(const std::string& host, uint16_t port) {
 
 // A client accepted from `listen_fd`, non-blocking; nullopt when none is waiting any more.
 struct Accepted {
-  Fd fd;
+  UniqueFd fd;
   std::string from;
 };
 std::optional<Accepted> accept_client(int listen_fd) {
   sockaddr_storage peer{};
   socklen_t length = sizeof peer;
-  Fd fd(accept4(listen_fd, reinterpret_cast<sockaddr*>(&peer), &length,
+  UniqueFd fd(accept4(listen_fd, reinterpret_cast<sockaddr*>(&peer), &length,
                 SOCK_NONBLOCK | SOCK_CLOEXEC));
   if (fd.get() < 0) return std::nullopt;
   // Bytes go out as the board sends them, a few at a time, as on a serial line: no coalescing.
@@ -285,7 +267,7 @@ class PtyLink final : public Link {
  public:
   static constexpr int kRecheckMs = 20;
 
-  PtyLink(Fd master, std::string path, Notes notes)
+  PtyLink(UniqueFd master, std::string path, Notes notes)
       : master_(std::move(master)), path_(std::move(path)), notes_(notes) {}
 
   std::string announcement() const override { return "pty " + path_; }
@@ -338,7 +320,7 @@ class PtyLink final : public Link {
   // The board's output still queued on the other side's input, unread by the one who closed it.
   // Flushing needs a descriptor of that side; its close leaves the hangup as it was.
   void flush_unread_output() {
-    Fd other(::open(path_.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC));
+    UniqueFd other(::open(path_.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC));
     if (other.get() >= 0) tcflush(other.get(), TCIFLUSH);
   }
 
@@ -354,7 +336,7 @@ class PtyLink final : public Link {
     note(notes_, path_ + " closed by the other side; waiting for it to be opened again");
   }
 
-  Fd master_;
+  UniqueFd master_;
   std::string path_;
   Notes notes_;
   bool hung_up_ = true;
@@ -382,7 +364,7 @@ Result<std::unique_ptr<Link>> open_tcp_link(const std::string& host, uint16_t po
 
 Result<std::unique_ptr<Link>> open_pty_link(Notes notes) {
   using LinkResult = Result<std::unique_ptr<Link>>;
-  Fd master(posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC));
+  UniqueFd master(posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC));
   if (master.get() < 0) return LinkResult::fail(os_error("cannot create a pseudo-terminal"));
   if (grantpt(master.get()) != 0 || unlockpt(master.get()) != 0) {
     return LinkResult::fail(os_error("cannot unlock the pseudo-terminal"));
@@ -400,7 +382,7 @@ Result<std::unique_ptr<Link>> open_pty_link(Notes notes) {
   if (!set_nonblocking(master.get())) return LinkResult::fail(os_error("fcntl"));
   // Opened and closed once, the other side reports a hangup until someone opens it; never
   // opened, it reports nothing and the board's first lines would wait there for anyone.
-  if (Fd(::open(path, O_RDWR | O_NOCTTY | O_CLOEXEC)).get() < 0) {
+  if (UniqueFd(::open(path, O_RDWR | O_NOCTTY | O_CLOEXEC)).get() < 0) {
     return LinkResult::fail(os_error(std::string("cannot open ") + path));
   }
   return LinkResult::ok(std::make_unique<PtyLink>(std::move(master), path, notes));

@@ -57,6 +57,9 @@ struct MotorConfig {
   double accel = 0.0;               // default acceleration, steps/s² (0: constant rate)
   std::optional<double> min_position;  // soft travel limits, in steps from home
   std::optional<double> max_position;
+  // The profile axis it is (a file in a rig's terms): its homing and soft limits are the
+  // profile's, as `hmc home` applies them.
+  std::optional<hmc::Axis> axis;
   Location where;
 
   double steps_per_degree() const { return full_steps_per_rev * microstep * gear_ratio / 360.0; }
@@ -138,7 +141,7 @@ struct MotionFile {
   int version = kFormatVersion;
   std::string path;
   std::string name;  // optional "name"
-  std::string profile;  // the machine profile's file, when the file names one ("profile")
+  std::string profile;  // the machine profile's file: the one the file names, or the program's it uses
   std::vector<MotorConfig> motors;
   std::vector<Step> steps;
   // What is worth saying though it is no mistake: each value rounded to a whole step, where it is.
@@ -148,8 +151,14 @@ struct MotionFile {
 };
 
 struct ReadOptions {
-  // The profile of a file that names none and declares no "motors" (a program's chosen profile).
+  // The program's chosen profile (hmc's --profile, HMC_PROFILE or default config; Python's
+  // Board(profile=)): the motors of a file that names none and declares no "motors".
   const hmc::Profile* profile = nullptr;
+  // How `profile` was chosen, as messages name it ("--profile", "HMC_PROFILE"); empty: by default.
+  // A file naming another profile than one chosen so is a mistake, at its "profile" (it was
+  // written for another rig); a default gives way to the file's own profile, with a note.
+  // "Another" is another file whose text differs too: a copy of the same profile is the same.
+  std::string profile_chosen_by;
   // Loads the profile a file names (its "profile", and the motion file's path); empty: the
   // named file, relative to the motion file's folder, with load_profile(). An error is a sentence.
   std::function<Result<hmc::Profile, std::string>(const std::string& name, const std::string& motion_file)>

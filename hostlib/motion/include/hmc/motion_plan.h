@@ -25,7 +25,10 @@
 //    an acceleration rounding to 0 or above its range) is planned as stages instead.
 //  - Sampled profiles (trapezoid with the seed's firmware: 8 slices per ramp; S-curve: 12):
 //    the ramp is cut at equal times, each slice a stage of its whole steps at its mean rate.
-//  - Homing has no known duration: 0.5 s per motor is assumed (Action::estimated).
+//  - Homing has no known duration: 0.5 s per motor is assumed (Action::estimated). A profile
+//    axis homes as its profile says (axis_moves.h's homing_setup, as `hmc home`): the settings
+//    first, a pull-off or re-approach the profile leaves out set to none, so that where homing
+//    leaves the motor is known; then, with our firmware, its soft limits (LIM).
 //  - A stop ends when its motors rest: at once at constant rate, after braking at the
 //    acceleration set on the board otherwise; a stopped motor's position is unknown after.
 //  - Coordinated: every motor ends at the same time E = max(start_k + own duration_k); a motor
@@ -87,6 +90,7 @@ struct Action {
   std::vector<double> commands_at_s;  // planned send time of each entry of `commands`
   bool wait_for_motors = true;        // the action ends when its motors rest (moves, home, stop)
   std::vector<uint32_t> motors;       // the motors it moves or waits for
+  std::vector<int64_t> homed_at;      // homing: where each of `motors` stands once homed (steps)
   bool estimated = false;             // end_s is a guess (homing takes as long as the switch)
 };
 
@@ -95,7 +99,8 @@ struct MotorTrack {
   uint32_t motor = 1;
   uint32_t microstep = 16;
   std::vector<VelocityPoint> velocity;
-  int64_t start_position = 0;  // steps
+  int64_t start_position = 0;  // steps: the whole step the plan counts from
+  double start_exact = 0;      // where the motor stood (a fraction: between two steps)
   int64_t end_position = 0;
   bool start_known = true;     // false: the position is not known (not homed, or stopped mid-move);
   bool end_known = true;       //   the position then counts from wherever the motor was
@@ -113,8 +118,10 @@ enum class TargetFirmware : uint8_t { kV2, kSeed };
 struct PlanOptions {
   TargetFirmware firmware = TargetFirmware::kV2;
   // Start positions (steps at each motor's microstep) of motors 1-3, when known; absolute moves
-  // before a home need them.
-  std::optional<int64_t> start_position[proto::kMotorCount];
+  // before a home need them. A board that stands between two steps of the motor's microstep (moved
+  // at a finer one) gives a fraction: the plan counts from the nearest whole step, and a position
+  // becomes the whole number of steps that brings the motor nearest it.
+  std::optional<double> start_position[proto::kMotorCount];
   uint32_t baud = 115200;  // frame wire times, for when coordinated motors start
   StepBudgets budgets;     // the board's (Session::step_budgets_in_force), else this firmware's
 };

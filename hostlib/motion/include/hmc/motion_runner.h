@@ -47,8 +47,14 @@ struct RunReport {
   std::optional<SessionError> error;  // why it stopped early
 };
 
-// Where the plan has every motor (steps at its microstep) when action `index` starts.
-std::array<std::optional<int64_t>, proto::kMotorCount> planned_positions(const Plan& plan, size_t index);
+// Where the plan has every motor (steps at its microstep) when action `index` starts: exactly where
+// a run from the start would have it then, a start between two steps included.
+std::array<std::optional<double>, proto::kMotorCount> planned_positions(const Plan& plan, size_t index);
+
+// Where the board says each of the file's motors stands (steps at each motor's microstep, a fraction
+// between two of them), as the start positions of a plan run from here. With our firmware; the
+// seed's reports no positions, so nothing is set.
+void start_where_board_is(const Session& session, const MotionFile& file, PlanOptions& options);
 
 class MotionRunner {
  public:
@@ -62,7 +68,7 @@ class MotionRunner {
   SessionResult<Done> feed();
   SessionResult<Done> wait_motors(const std::vector<uint32_t>& motors);
   SessionResult<Done> wait_until(Clock::time_point when);
-  SessionResult<Done> return_to(const std::array<std::optional<int64_t>, proto::kMotorCount>& positions);
+  SessionResult<Done> return_to(const std::array<std::optional<double>, proto::kMotorCount>& positions);
   void emit(RunEvent::Kind kind, const Action* action);
 
   Session& session_;

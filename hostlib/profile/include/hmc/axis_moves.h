@@ -67,8 +67,16 @@ Result<uint32_t> accel_steps(const Axis& axis, const std::string& text, std::vec
 struct HomingSetup {
   std::vector<SetSetting> settings;
   StepperMove move;
+  // Where homing leaves the motor, in steps at move.microstep (the board zeroes at the switch; a
+  // pull-off without a slow re-approach ends that far off it), when the settings sent decide it;
+  // nullopt when the board's own settings do.
+  std::optional<int64_t> homed_position;
 };
-HomingSetup homing_setup(const Axis& axis, StepperMove move);
+// A pull-off or slow re-approach the profile leaves out: kept as the board has it (`hmc home`,
+// Python: what the user SET stays), or set to none by a program that owns the board while it runs
+// and must know where homing leaves the motor (grbl, a motion file's `home`).
+enum class UnsetHoming : uint8_t { kKeep, kNone };
+HomingSetup homing_setup(const Axis& axis, StepperMove move, UnsetHoming unset = UnsetHoming::kKeep);
 
 // The axis's soft limits as the board's LIM (1/256-step positions, an inverted axis's swapped);
 // nullopt for an axis without limits. Send it only once the motor is homed or zeroed: before
