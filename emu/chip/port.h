@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <string>
 
+#include "../../firmware/targets/samd21/port_functions.h"
 #include "chip.h"
 
 namespace hmc::emu {
@@ -26,6 +27,10 @@ class Port : public Peripheral {
     return (groups_[group].pmux[pin / 2] >> (4 * (pin & 1))) & 0xF;
   }
   bool level(unsigned group, unsigned pin) const;
+  // The peripheral signal a pin is handed to: PINCFG.PMUXEN set, PMUX's function looked up in the
+  // datasheet's multiplexing table (Table 7-1, firmware/targets/samd21/port_functions.h). nullptr:
+  // a GPIO, or a function the table does not list for this pin (it carries no modelled signal).
+  const samd21::port_functions::Signal* route(unsigned group, unsigned pin) const;
   // The board drives (or releases, level -1) an input pin.
   void drive(unsigned group, unsigned pin, int level);
 
