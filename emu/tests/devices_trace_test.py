@@ -10,7 +10,11 @@ edges. They must agree:
 
   - servos: per servo, the sequence of pulse widths and releases (a repeat collapsed) is equal,
     every pulse is an angle the script asked for (544 + angle*1856/180 us, rounded), and no
-    other width ever reaches the pin (a short first pulse would be one);
+    other width ever reaches the pin (a short first pulse would be one). One SVM to a released
+    servo is timed to arrive 0.25 ms into a TCC0 period, inside the pulse the channel still
+    generates (servo 1's last, 647 us): a pin handed to TCC0 there at once would carry a short
+    first pulse (issue 17); the image's hand-over (servo_pwm.h) waits for the pulse to end. The
+    period's phase is read from a first short run (the first boot pulse's rising edge);
   - LED strips: per strip, the sequence of colours is equal, hmc-sim's scaled by the board's
     brightness (firmware/targets/samd21/board.h, kLedBrightness: the image scales before it
     encodes, the core's trace is before the scaling); every frame is whole: 90 LEDs, one colour;
@@ -29,7 +33,10 @@ import subprocess
 import sys
 import tempfile
 
-SERVO_ANGLES = {1: [135, 10], 2: [30]}
+SERVO_ANGLES = {1: [135, 10, 170], 2: [30]}
+TICKS_PER_US = 48
+PERIOD_TICKS = 20000 * TICKS_PER_US  # servo_pwm.h: 20 ms
+BYTE_TICKS = 10 * 1000000 * TICKS_PER_US // 115200  # 8N1 at 115200 baud
 
 
 def frame(name, *values):
@@ -52,6 +59,16 @@ at 2200ms estop
 at 2250ms estop release
 at 2600ms send STX#1#VER#0#ETX
 """
+
+
+def handover_line(first_rise):
+    """A script line whose SVM reaches the board 0.25 ms into the first TCC0 period after 2 s.
+
+    `first_rise`: the tick of the first servo pulse's rising edge (a period start)."""
+    line = frame("SVM", 1, 170)
+    period = first_rise + ((2000000 * TICKS_PER_US - first_rise) // PERIOD_TICKS + 1) * PERIOD_TICKS
+    at = period + 250 * TICKS_PER_US - (len(line) + 1) * BYTE_TICKS
+    return f"at {at}t send {line}\n"
 
 
 def pulse_us(angle):
@@ -95,10 +112,15 @@ def main(emu, image, sim, board_h):
             failures.append(what)
 
     with tempfile.TemporaryDirectory() as work:
+        emu_trace = os.path.join(work, "emu.jsonl")
+        subprocess.run([emu, image, "--fast", "--quiet", "--max-time", "0.1", "--trace", emu_trace],
+                       stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=120)
+        first = next(e for e in events(emu_trace) if e["ev"] == "servo")
+        first_rise = first["t"] - first["pulse_us"] * TICKS_PER_US
         script = os.path.join(work, "script.txt")
         with open(script, "w") as f:
             f.write(SCRIPT)
-        emu_trace = os.path.join(work, "emu.jsonl")
+            f.write(handover_line(first_rise))
         sim_trace = os.path.join(work, "sim.jsonl")
         emu_run = subprocess.run([emu, image, "--fast", "--quiet", "--max-time", "2.8", "--script", script,
                                   "--trace", emu_trace], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
