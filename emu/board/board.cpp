@@ -10,11 +10,11 @@
 // (CC0 + 1))).
 #include "board.h"
 
+#include <algorithm>
+
 #include "../chip/chip.h"
 #include "../chip/port.h"
 #include "../chip/timers.h"
-
-#include <algorithm>
 #include "samd21_board_map.h"
 #include "sim_board.h"
 
@@ -53,7 +53,6 @@ constexpr std::array<uint16_t, 8> kDrvReset = {0xC10, 0x1FF, 0x030, 0x080,
                                                0x110, 0x040, 0xA59, 0x000};
 
 }  // namespace
-
 
 Board::Board(Chip& chip)
     : chip_(chip), strips_{Sk6812Strip(pinmap::kLedsPerStrip), Sk6812Strip(pinmap::kLedsPerStrip)} {
@@ -133,7 +132,12 @@ void Board::outputs_changed(unsigned group, uint32_t before, uint32_t after) {
       deadlines_changed();
     }
   }
-  refresh_device_pins(chip_.now_ps());
+  // The servo and strip pins, when this write changed one of them (STEP edges do not).
+  uint32_t device_pins = 0;
+  for (const pinmap::Pin& pin : {kStripPins[0], kStripPins[1], pinmap::servo::kPins[0], pinmap::servo::kPins[1]}) {
+    if (pin.group == group) device_pins |= 1u << pin.number;
+  }
+  if (((before ^ after) & device_pins) != 0) refresh_device_pins(chip_.now_ps());
 }
 
 void Board::refresh_device_pins(uint64_t ps) {
@@ -271,17 +275,19 @@ bool Board::set_switch(const std::string& name, bool pressed) {
   if (name == "limit2-") sw = &pinmap::kLimits[1][0];
   if (name == "limit2+") sw = &pinmap::kLimits[1][1];
   if (sw == nullptr) return false;
-  if (name == "emergency") {
+  if (sw == &pinmap::kEmergency) {
     traced(chip_.now_ps(), std::string("\"ev\":\"emergency\",\"pressed\":") + json_flag(pressed));
-  } else {
-    const unsigned motor = name[5] == '1' ? 1 : 2;
-    traced(chip_.now_ps(), "\"ev\":\"switch\",\"motor\":" + std::to_string(motor) + ",\"end\":" +
-                               (name[6] == '-' ? "0" : "1") + ",\"pressed\":" + json_flag(pressed));
+  }
+  for (unsigned motor = 0; motor < 2; ++motor) {
+    for (unsigned end = 0; end < 2; ++end) {
+      if (sw != &pinmap::kLimits[motor][end]) continue;
+      traced(chip_.now_ps(), "\"ev\":\"switch\",\"motor\":" + std::to_string(motor + 1) + ",\"end\":" +
+                                 std::to_string(end) + ",\"pressed\":" + json_flag(pressed));
+    }
   }
   // A pressed switch drives its pin to its active level; released, the pin is left to its pull.
   chip_.port().drive(sw->pin.group, sw->pin.number, pressed ? (sw->active_low ? 0 : 1) : -1);
   return true;
 }
-
 
 }  // namespace hmc::emu

@@ -140,7 +140,8 @@ uint32_t Port::access(uint32_t offset, uint32_t value, unsigned size, bool write
       }
   }
   if (g.out != old_out || g.dir != old_dir) outputs_changed(group, old_out, old_dir);
-  if (reg >= 0x30 && reg < 0x60) chip_.board().routes_changed();  // PMUX, PINCFG
+  // PMUX, PINCFG or DIR: a pin may carry another signal or level now.
+  if ((reg >= 0x30 && reg < 0x60) || g.dir != old_dir) chip_.board().routes_changed();
   return 0;
 }
 
