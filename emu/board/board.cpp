@@ -197,6 +197,7 @@ void Board::tone_source_changed() {
 
 void Board::flush_devices() {
   for (unsigned s = 0; s < 2; ++s) {
+    if (!strips_[s].has_frames() && !servos_[s].has_events()) continue;
     for (const Sk6812Strip::Frame& frame : strips_[s].take_frames()) traced(frame.latched_ps, led_fields(s + 1, frame));
     for (const ServoInput::Event& e : servos_[s].take_events()) {
       traced(e.ps, e.pulse_us == 0 ? "\"ev\":\"servo\",\"servo\":" + std::to_string(s + 1) + ",\"released\":true"

@@ -37,6 +37,7 @@ class Sk6812Strip {
   // When the pending frame latches, if the line stays low (UINT64_MAX: nothing pending).
   uint64_t latch_due_ps() const;
   std::vector<Frame> take_frames();
+  bool has_frames() const { return !frames_.empty(); }
   // Bits whose high or low time fell outside its datasheet window (T0H/T1H/T0L/T1L ± 0.15 µs).
   uint64_t bits() const { return bits_total_; }
   uint64_t highs_off_window() const { return highs_off_; }
@@ -72,6 +73,7 @@ class ServoInput {
   void poll(uint64_t now_ps);
   uint64_t release_due_ps() const;
   std::vector<Event> take_events();
+  bool has_events() const { return !events_.empty(); }
   uint64_t pulses() const { return pulses_; }
 
  private:

@@ -100,7 +100,9 @@ void Dmac::start(unsigned channel) {
 }
 
 void Dmac::advance(uint64_t) {
-  for (unsigned i = 0; i < kChannels; ++i) serve(i);
+  for (unsigned i = 0; i < kChannels; ++i) {
+    if (channels_[i].active) serve(i);
+  }
 }
 
 void Dmac::sercom_ready(unsigned sercom) {

@@ -33,13 +33,16 @@ bool Port::level(unsigned group, unsigned pin) const {
   return false;
 }
 
-const samd21::port_functions::Signal* Port::route(unsigned group, unsigned pin) const {
-  if ((groups_[group].pincfg[pin] & kPmuxEn) == 0) return nullptr;
-  const char letter = static_cast<char>('A' + pmux(group, pin));
-  for (const samd21::port_functions::Signal& s : samd21::port_functions::kSignals) {
-    if (s.group == group && s.number == pin && s.letter == letter) return &s;
+void Port::update_routes(unsigned group) {
+  Group& g = groups_[group];
+  for (unsigned pin = 0; pin < 32; ++pin) {
+    g.routes[pin] = nullptr;
+    if ((g.pincfg[pin] & kPmuxEn) == 0) continue;
+    const char letter = static_cast<char>('A' + pmux(group, pin));
+    for (const samd21::port_functions::Signal& s : samd21::port_functions::kSignals) {
+      if (s.group == group && s.number == pin && s.letter == letter) g.routes[pin] = &s;
+    }
   }
-  return nullptr;
 }
 
 // IN reads the pin only where the input buffer is on (PINCFG.INEN, 23.8.13); 0 elsewhere.
@@ -141,6 +144,7 @@ uint32_t Port::access(uint32_t offset, uint32_t value, unsigned size, bool write
   }
   if (g.out != old_out || g.dir != old_dir) outputs_changed(group, old_out, old_dir);
   // PMUX, PINCFG or DIR: a pin may carry another signal or level now.
+  if (reg >= 0x30 && reg < 0x60) update_routes(group);
   if ((reg >= 0x30 && reg < 0x60) || g.dir != old_dir) chip_.board().routes_changed();
   return 0;
 }

@@ -1,6 +1,8 @@
 // TC and TCC (timers.h).
 #include "timers.h"
 
+#include <algorithm>
+
 #include "../board/board.h"
 
 namespace hmc::emu {
@@ -223,6 +225,7 @@ void Tcc::reset_registers() {
   hz_ = 0;
   period_start_ = processed_ = 0;
   for (bool& l : level_) l = false;
+  next_ps_ = UINT64_MAX;
 }
 
 uint64_t Tcc::tick_hz() const {
@@ -268,7 +271,7 @@ void Tcc::apply_buffers() {
 // compare match with CCx (a CCx of 0 keeps it low; one above TOP keeps it high). A compare value
 // changed below the counter does not match until the next period: the output stays as it is.
 void Tcc::advance(uint64_t now_ps) {
-  if (!enabled() || hz_ == 0) return;
+  if (!enabled() || hz_ == 0 || now_ps < next_ps_) return;
   const uint64_t now = tick_at(now_ps);
   const bool npwm = (wave_ & 7) == kWaveNpwm;
   while (true) {
@@ -289,10 +292,12 @@ void Tcc::advance(uint64_t now_ps) {
     processed_ = end;
     for (unsigned c = 0; c < 4; ++c) set_output(c, npwm && cc_[c] != 0, ps_at(end));
   }
+  plan_next();
 }
 
-uint64_t Tcc::next_event_ps() const {
-  if (!enabled() || hz_ == 0) return UINT64_MAX;
+void Tcc::plan_next() {
+  next_ps_ = UINT64_MAX;
+  if (!enabled() || hz_ == 0) return;
   uint64_t next = period_start_ + period();
   if ((wave_ & 7) == kWaveNpwm) {
     for (unsigned c = 0; c < 4; ++c) {
@@ -300,7 +305,7 @@ uint64_t Tcc::next_event_ps() const {
       if (cc_[c] != 0 && match > processed_ && match < next) next = match;
     }
   }
-  return ps_at(next);
+  next_ps_ = ps_at(next);
 }
 
 uint32_t Tcc::read(uint32_t offset, unsigned size) {
@@ -325,6 +330,10 @@ uint32_t Tcc::read(uint32_t offset, unsigned size) {
 
 void Tcc::write(uint32_t offset, uint32_t value, unsigned size) {
   advance(chip_.now_ps());
+  // No edge lies between the last one applied and now (advance() stops short of the next), so
+  // the counter is known to be past now's count: a compare value written below it must not
+  // match in this period.
+  if (enabled() && hz_ != 0) processed_ = std::max(processed_, tick_at(chip_.now_ps()));
   RegisterBytes w(0x80);
   w.set(offset, value, size);
   const uint64_t sync_hz = chip_.channel_hz(kTccClockId);
@@ -439,6 +448,7 @@ void Tcc::write(uint32_t offset, uint32_t value, unsigned size) {
     buffer_valid_ |= kPerbv;
     stall();
   }
+  plan_next();
   for (uint32_t o = offset; o < offset + size; ++o) {
     const bool modelled = o < 0x0C || (o >= 0x24 && o < 0x38) || (o >= 0x3C && o < 0x54) || o >= 0x6C;
     if (!modelled) other_.set(o, w.get(o, 1), 1);

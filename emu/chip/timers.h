@@ -58,7 +58,7 @@ class Tcc : public Peripheral, public Timed {
   uint32_t read(uint32_t offset, unsigned size) override;
   void write(uint32_t offset, uint32_t value, unsigned size) override;
   void advance(uint64_t now_ps) override;
-  uint64_t next_event_ps() const override;
+  uint64_t next_event_ps() const override { return next_ps_; }
   bool irq() const { return (intflag_ & inten_) != 0; }
   // The level of waveform output WO[wo] now (low while disabled).
   bool output(unsigned wo);
@@ -87,6 +87,8 @@ class Tcc : public Peripheral, public Timed {
   uint64_t period_start_ = 0;  // tick at which the current period began
   uint64_t processed_ = 0;     // edges through this tick have been applied
   bool level_[4] = {};
+  uint64_t next_ps_ = UINT64_MAX;  // the next edge or wrap (nothing changes before it)
+  void plan_next();
 };
 
 }  // namespace hmc::emu
