@@ -78,6 +78,7 @@ void Sercom::write(uint32_t offset, uint32_t value, unsigned size) {
       status_ = 0;
       tx_buffer_.reset();
       shifting_ = false;
+      last_bit_ = false;
       rx_fifo_.clear();
       chip_.charge_stall(5, chip_.channel_hz(0x14 + index_) ? chip_.channel_hz(0x14 + index_) : 1);
       chip_.irq_changed();

@@ -272,16 +272,15 @@ void Tcc::apply_buffers() {
 // changed below the counter does not match until the next period: the output stays as it is.
 void Tcc::advance(uint64_t now_ps) {
   if (!enabled() || hz_ == 0 || now_ps < next_ps_) return;
+  // Enabled means NPWM: enabling in another mode, or writing WAVE while enabled, stops the
+  // emulator (write()).
   const uint64_t now = tick_at(now_ps);
-  const bool npwm = (wave_ & 7) == kWaveNpwm;
   while (true) {
     const uint64_t end = period_start_ + period();  // the tick of the next wrap
     const uint64_t upto = now < end ? now : end - 1;
-    if (npwm) {
-      for (unsigned c = 0; c < 4; ++c) {
-        const uint64_t match = period_start_ + cc_[c];
-        if (cc_[c] != 0 && match > processed_ && match <= upto) set_output(c, false, ps_at(match));
-      }
+    for (unsigned c = 0; c < 4; ++c) {
+      const uint64_t match = period_start_ + cc_[c];
+      if (cc_[c] != 0 && match > processed_ && match <= upto) set_output(c, false, ps_at(match));
     }
     if (upto > processed_) processed_ = upto;
     if (now < end) break;
@@ -290,7 +289,7 @@ void Tcc::advance(uint64_t now_ps) {
     apply_buffers();
     period_start_ = end;
     processed_ = end;
-    for (unsigned c = 0; c < 4; ++c) set_output(c, npwm && cc_[c] != 0, ps_at(end));
+    for (unsigned c = 0; c < 4; ++c) set_output(c, cc_[c] != 0, ps_at(end));
   }
   plan_next();
 }
@@ -299,11 +298,9 @@ void Tcc::plan_next() {
   next_ps_ = UINT64_MAX;
   if (!enabled() || hz_ == 0) return;
   uint64_t next = period_start_ + period();
-  if ((wave_ & 7) == kWaveNpwm) {
-    for (unsigned c = 0; c < 4; ++c) {
-      const uint64_t match = period_start_ + cc_[c];
-      if (cc_[c] != 0 && match > processed_ && match < next) next = match;
-    }
+  for (unsigned c = 0; c < 4; ++c) {
+    const uint64_t match = period_start_ + cc_[c];
+    if (cc_[c] != 0 && match > processed_ && match < next) next = match;
   }
   next_ps_ = ps_at(next);
 }
@@ -367,7 +364,7 @@ void Tcc::write(uint32_t offset, uint32_t value, unsigned size) {
         chip_.violation("TCC0 enabled without its generic clock (GCLK channel 0x1A off; datasheet 31.5.3)");
         return;
       }
-      if ((wave_ & 7) != kWaveNpwm && (wave_ & 7) != 0) {
+      if ((wave_ & 7) != kWaveNpwm) {
         chip_.violation("TCC0 waveform modes other than NPWM are not modelled (WAVE.WAVEGEN " +
                         std::to_string(wave_ & 7) + ")");
         return;
@@ -375,7 +372,7 @@ void Tcc::write(uint32_t offset, uint32_t value, unsigned size) {
       // The counter starts from COUNT (0 after a reset) when enabled (31.6.2.3).
       enable_ps_ = now_ps;
       period_start_ = processed_ = 0;
-      for (unsigned c = 0; c < 4; ++c) set_output(c, (wave_ & 7) == kWaveNpwm && cc_[c] != 0, now_ps);
+      for (unsigned c = 0; c < 4; ++c) set_output(c, cc_[c] != 0, now_ps);
     } else if (was && !enabled()) {
       for (unsigned c = 0; c < 4; ++c) set_output(c, false, now_ps);
     }
