@@ -22,7 +22,8 @@ edges. They must agree:
     tone on the pin; the main loop ends it);
   - switches and the emergency switch: the same changes in the same order;
   - STEP edges: the same count and final position per motor (the power-up self-test);
-  - booting LEDs: the same sequence of states.
+  - booting LEDs: the same sequence of states;
+  - a trace file that cannot be written: exit 3, naming it.
 
 Usage: devices_trace_test.py HMC_EMU IMAGE HMC_SIM BOARD_H
 """
@@ -112,6 +113,10 @@ def main(emu, image, sim, board_h):
             failures.append(what)
 
     with tempfile.TemporaryDirectory() as work:
+        bad = subprocess.run([emu, image, "--fast", "--max-time", "0.01", "--trace", os.path.join(work, "no", "t")],
+                             stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=60)
+        check(bad.returncode == 3 and "cannot write trace" in bad.stderr,
+              f"a trace file that cannot be written: exit 3 naming it (exit {bad.returncode}: {bad.stderr.strip()})")
         emu_trace = os.path.join(work, "emu.jsonl")
         subprocess.run([emu, image, "--fast", "--quiet", "--max-time", "0.1", "--trace", emu_trace],
                        stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=120)
