@@ -18,6 +18,7 @@
 #include <optional>
 
 #include "board/board.h"
+#include "board/trace.h"
 #include "bootloader/bare_chip.h"
 #include "bootloader/bootloader_session.h"
 #include "chip/chip.h"
@@ -78,6 +79,7 @@ struct Options {
   std::string script;  // hmc-sim's script language (docs/sim.md, "Injected events")
   std::vector<std::string> axes;  // hmc-sim's --axis M:LOW:HIGH:START
   double stall_at_s = 0;          // the CPU stops executing here (0: never), until a reset
+  std::string trace;              // hmc-sim's trace format (docs/sim.md, "Trace"); "-": stderr
 };
 
 // The bootloader's run before the first boot: the flash starts with the image's bytes (or erased
@@ -152,6 +154,10 @@ class Emulator {
     machine_.chip = std::make_unique<Chip>(chip_options);
     machine_.chip->pm().set_reset_cause(reset_cause);
     time_offset_ps_ += carried_ps;
+    if (trace_ != nullptr) {
+      trace_->set_offset_ps(time_offset_ps_);
+      machine_.chip->board().set_trace(trace_);
+    }
     CpuOptions cpu_options;
     cpu_options.run_fault_handler = options_.run_fault_handler;
     cpu_options.count_calls_at = options_.count_calls_at;
@@ -306,6 +312,7 @@ class Emulator {
   }
 
   const Machine& machine() const { return machine_; }
+  void set_trace(Trace* trace) { trace_ = trace; }
 
  private:
   const Options& options_;
@@ -313,6 +320,7 @@ class Emulator {
   sim::Link& link_;
   Machine machine_;
   uint64_t time_offset_ps_ = 0;
+  Trace* trace_ = nullptr;
   sim::PollSet poll_;
   bool booted_ = false;  // the board has sent its first line since power-on
   bool measuring_ = false;
@@ -436,13 +444,27 @@ int run(const Options& options) {
     script = std::move(*parsed.value);
   }
 
+  std::ofstream trace_file;
+  std::unique_ptr<Trace> trace;
+  if (options.trace == "-") {
+    trace = std::make_unique<Trace>(std::cerr);
+  } else if (!options.trace.empty()) {
+    trace_file.open(options.trace, std::ios::binary | std::ios::trunc);
+    if (!trace_file) {
+      std::cerr << "hmc-emu: cannot write trace '" << options.trace << "'\n";
+      return kExitIo;
+    }
+    trace = std::make_unique<Trace>(trace_file);
+  }
   Emulator emulator(resolved, image, **link.value, std::move(script), control.get());
+  emulator.set_trace(trace.get());
   if (!emulator.power_on(Pm::kCausePowerOn, error)) {
     std::cerr << "hmc-emu: " << error << '\n';
     return kExitImage;
   }
   const auto start = std::chrono::steady_clock::now();
   const int code = emulator.run();
+  if (trace) trace->flush();
   if (options.stats) {
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const Machine& m = emulator.machine();
@@ -560,6 +582,9 @@ int main(int argc, char** argv) {
                  "the CPU hangs at this virtual time (seconds): no instruction, no interrupt until a "
                  "reset, as a stalled main loop looks to the watchdog")
       ->check(CLI::PositiveNumber);
+  app.add_option("--trace", options.trace,
+                 "write what the devices on the pins see (steps, switches, servo pulses, LED colours decoded "
+                 "from the strips' bitstreams, tones, booting LEDs) as hmc-sim's JSON-lines trace ('-': stderr)");
   app.add_flag("--stats", options.stats, "print virtual/wall time and cycles per handler at the end");
   app.add_option("--count-calls", options.count_calls,
                  "--stats counts this function's calls (a symbol, as written or demangled) and gives the "

@@ -66,14 +66,16 @@ Chip::Chip(const ChipOptions& options) : options_(options) {
   attach(0x60000000, 0x400, &port_->iobus(), "PORT (IOBUS)", -1, 0);
   attach(0xE000E000, 0x1000, scs_.get(), "System Control Space", -1, 0);
 
-  timed_ = {sysctrl_.get(), wdt_.get(), scs_.get(), tc3_.get(), tc4_.get()};
+  timed_ = {sysctrl_.get(), wdt_.get(), scs_.get(), tc3_.get(), tc4_.get(), tcc0_.get()};
   for (auto& s : sercoms_) timed_.push_back(s.get());
   timed_.push_back(dmac_.get());
+  timed_.push_back(board_.get());  // its devices' own deadlines (a strip's latch, a servo let go)
 
   for (auto& line : lines_) line = [] { return false; };
   lines_[4] = [this] { return eic_->irq(); };
   lines_[6] = [this] { return dmac_->irq(); };
   for (unsigned n = 0; n < 6; ++n) lines_[9 + n] = [this, n] { return sercoms_[n]->irq(); };
+  lines_[15] = [this] { return tcc0_->irq(); };
   lines_[18] = [this] { return tc3_->irq(); };
   lines_[19] = [this] { return tc4_->irq(); };
   // The 32-bit pair's interrupt comes from TC4 (the master, 30.6.2.4); TC5 is not a block of
@@ -155,6 +157,15 @@ void Chip::bus_write(uint32_t address, uint32_t value, unsigned size) {
 bool Chip::irq_line(unsigned line) const { return line < kIrqLines && lines_[line](); }
 
 void Chip::eic_line(unsigned extint, bool level) { eic_->line_changed(extint, level); }
+
+void Chip::dma_trigger(unsigned sercom) { dmac_->sercom_ready(sercom); }
+
+bool Chip::peripheral_output(samd21::port_functions::Unit unit, unsigned instance, unsigned index) {
+  using samd21::port_functions::Unit;
+  if (unit == Unit::kTcc && instance == 0) return tcc0_->output(index);
+  if (unit == Unit::kSercom && instance < 6) return sercoms_[instance]->pad_output(index);
+  return false;  // TC WO levels are not followed edge by edge (the buzzer is heard by its frequency)
+}
 
 void Chip::violation(const std::string& message) {
   if (violation_.empty()) violation_ = message;

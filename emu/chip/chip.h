@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "../../firmware/targets/samd21/port_functions.h"
 #include "peripheral.h"
 
 namespace hmc::emu {
@@ -132,6 +133,13 @@ class Chip {
   Port& port() { return *port_; }
   Nvmctrl& nvmctrl() { return *nvmctrl_; }
   Sercom& sercom(unsigned n) { return *sercoms_[n]; }
+  Tc& tc3() { return *tc3_; }
+  // SERCOM `sercom`'s transmit buffer emptied at a byte's end: the DMAC may feed it (dmac.h).
+  void dma_trigger(unsigned sercom);
+  Tcc& tcc0() { return *tcc0_; }
+  // The level a peripheral drives on its output signal (`unit` a port_functions::Unit: SERCOM
+  // pad, TC or TCC WO[index]) now; false for a signal nothing drives.
+  bool peripheral_output(samd21::port_functions::Unit unit, unsigned instance, unsigned index);
   Board& board() { return *board_; }
 
  private:

@@ -101,31 +101,41 @@ void Dmac::start(unsigned channel) {
 
 void Dmac::advance(uint64_t) {
   for (unsigned i = 0; i < kChannels; ++i) {
-    Channel& c = channels_[i];
-    if (!c.active) continue;
-    const unsigned trigger = (c.ctrlb >> 8) & 0x3F;
-    // SERCOMn TX trigger 2n+2 (20.8.17, TRIGSRC): one beat whenever DATA is empty.
-    if (trigger < 2 || trigger > 13 || trigger % 2 != 0) {
-      chip_.violation("DMAC trigger " + std::to_string(trigger) + " is not modelled");
+    if (channels_[i].active) serve(i);
+  }
+}
+
+void Dmac::sercom_ready(unsigned sercom) {
+  for (unsigned i = 0; i < kChannels; ++i) {
+    if (channels_[i].active && ((channels_[i].ctrlb >> 8) & 0x3F) == 2 * sercom + 2) serve(i);
+  }
+}
+
+void Dmac::serve(unsigned i) {
+  Channel& c = channels_[i];
+  if (!c.active) return;
+  const unsigned trigger = (c.ctrlb >> 8) & 0x3F;
+  // SERCOMn TX trigger 2n+2 (20.8.17, TRIGSRC): one beat whenever DATA is empty.
+  if (trigger < 2 || trigger > 13 || trigger % 2 != 0) {
+    chip_.violation("DMAC trigger " + std::to_string(trigger) + " is not modelled");
+    return;
+  }
+  Sercom& sercom = chip_.sercom((trigger - 2) / 2);
+  while (c.remaining > 0 && sercom.data_empty()) {
+    uint8_t byte = 0;
+    if (!chip_.memory().read(c.source, &byte, 1)) {
+      chip_.violation("DMAC read outside memory");
       return;
     }
-    Sercom& sercom = chip_.sercom((trigger - 2) / 2);
-    while (c.remaining > 0 && sercom.data_empty()) {
-      uint8_t byte = 0;
-      if (!chip_.memory().read(c.source, &byte, 1)) {
-        chip_.violation("DMAC read outside memory");
-        return;
-      }
-      sercom.dma_write(byte);
-      if (c.source_increments) ++c.source;
-      --c.remaining;
-    }
-    if (c.remaining == 0) {
-      c.active = false;
-      c.ctrla = 0;
-      c.intflag |= 2;  // TCMPL
-      chip_.irq_changed();
-    }
+    sercom.dma_write(byte);
+    if (c.source_increments) ++c.source;
+    --c.remaining;
+  }
+  if (c.remaining == 0) {
+    c.active = false;
+    c.ctrla = 0;
+    c.intflag |= 2;  // TCMPL
+    chip_.irq_changed();
   }
 }
 

@@ -20,6 +20,11 @@ class Dmac : public Peripheral, public Timed {
   void advance(uint64_t now_ps) override;
   uint64_t next_event_ps() const override { return UINT64_MAX; }
   bool irq() const;
+  // SERCOM `sercom`'s transmitter wants a byte (its DRE trigger) at the end of a byte it shifted:
+  // a channel on that trigger moves its beat then. The DMAC is a bus master of its own, so a
+  // CPU bus stall (a synchronised write) does not hold it up; advance() alone would serve the
+  // trigger only after the stall.
+  void sercom_ready(unsigned sercom);
 
  private:
   struct Channel {
@@ -30,6 +35,7 @@ class Dmac : public Peripheral, public Timed {
     bool source_increments = false;
   };
   void start(unsigned channel);
+  void serve(unsigned channel);
   Chip& chip_;
   uint16_t ctrl_ = 0;
   uint32_t base_ = 0, writeback_ = 0;

@@ -16,13 +16,33 @@ constexpr uint8_t kPmuxEn = 1, kInEn = 2, kPullEn = 4;
 
 // Datasheet 23.6.3.2/23.6.3.3: an output drives OUT; an input with PULLEN is pulled toward OUT;
 // an input the board does not drive and no pull holds reads low here (it floats on silicon).
+// A pin handed to a peripheral output (SERCOM pad, TC/TCC WO; 23.6.3.5 "Peripheral Multiplexing")
+// is driven by it, whatever DIR and OUT say; an EIC line (function A) leaves it an input.
 bool Port::level(unsigned group, unsigned pin) const {
   const Group& g = groups_[group];
   const uint32_t bit = 1u << pin;
+  if ((g.pincfg[pin] & kPmuxEn) != 0) {
+    const samd21::port_functions::Signal* signal = route(group, pin);
+    if (signal != nullptr && signal->unit != samd21::port_functions::Unit::kEic) {
+      return chip_.peripheral_output(signal->unit, signal->instance, signal->index);
+    }
+  }
   if ((g.dir & bit) != 0 && (g.pincfg[pin] & kPmuxEn) == 0) return (g.out & bit) != 0;
   if (g.external[pin] >= 0) return g.external[pin] != 0;
   if ((g.pincfg[pin] & kPullEn) != 0) return (g.out & bit) != 0;
   return false;
+}
+
+void Port::update_routes(unsigned group) {
+  Group& g = groups_[group];
+  for (unsigned pin = 0; pin < 32; ++pin) {
+    g.routes[pin] = nullptr;
+    if ((g.pincfg[pin] & kPmuxEn) == 0) continue;
+    const char letter = static_cast<char>('A' + pmux(group, pin));
+    for (const samd21::port_functions::Signal& s : samd21::port_functions::kSignals) {
+      if (s.group == group && s.number == pin && s.letter == letter) g.routes[pin] = &s;
+    }
+  }
 }
 
 // IN reads the pin only where the input buffer is on (PINCFG.INEN, 23.8.13); 0 elsewhere.
@@ -123,6 +143,9 @@ uint32_t Port::access(uint32_t offset, uint32_t value, unsigned size, bool write
       }
   }
   if (g.out != old_out || g.dir != old_dir) outputs_changed(group, old_out, old_dir);
+  // PMUX, PINCFG or DIR: a pin may carry another signal or level now.
+  if (reg >= 0x30 && reg < 0x60) update_routes(group);
+  if ((reg >= 0x30 && reg < 0x60) || g.dir != old_dir) chip_.board().routes_changed();
   return 0;
 }
 

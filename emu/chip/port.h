@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <string>
 
+#include "../../firmware/targets/samd21/port_functions.h"
 #include "chip.h"
 
 namespace hmc::emu {
@@ -26,6 +27,12 @@ class Port : public Peripheral {
     return (groups_[group].pmux[pin / 2] >> (4 * (pin & 1))) & 0xF;
   }
   bool level(unsigned group, unsigned pin) const;
+  // The peripheral signal a pin is handed to: PINCFG.PMUXEN set, PMUX's function looked up in the
+  // datasheet's multiplexing table (Table 7-1, firmware/targets/samd21/port_functions.h). nullptr:
+  // a GPIO, or a function the table does not list for this pin (it carries no modelled signal).
+  const samd21::port_functions::Signal* route(unsigned group, unsigned pin) const {
+    return groups_[group].routes[pin];
+  }
   // The board drives (or releases, level -1) an input pin.
   void drive(unsigned group, unsigned pin, int level);
 
@@ -34,6 +41,7 @@ class Port : public Peripheral {
     uint32_t dir = 0, out = 0, ctrl = 0, sampled = 0;
     uint8_t pmux[16] = {};
     uint8_t pincfg[32] = {};
+    const samd21::port_functions::Signal* routes[32] = {};  // route(), kept at PMUX/PINCFG writes
     int8_t external[32];
     Group() {
       for (int8_t& e : external) e = -1;
@@ -50,6 +58,7 @@ class Port : public Peripheral {
   };
   uint32_t access(uint32_t offset, uint32_t value, unsigned size, bool write, bool iobus);
   uint32_t live_in(unsigned group) const;
+  void update_routes(unsigned group);
   void outputs_changed(unsigned group, uint32_t old_out, uint32_t old_dir);
 
   Chip& chip_;

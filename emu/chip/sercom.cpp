@@ -78,6 +78,7 @@ void Sercom::write(uint32_t offset, uint32_t value, unsigned size) {
       status_ = 0;
       tx_buffer_.reset();
       shifting_ = false;
+      last_bit_ = false;
       rx_fifo_.clear();
       chip_.charge_stall(5, chip_.channel_hz(0x14 + index_) ? chip_.channel_hz(0x14 + index_) : 1);
       chip_.irq_changed();
@@ -141,10 +142,29 @@ void Sercom::write_data(uint16_t byte) {
   chip_.reschedule();
 }
 
+// CTRLA.DOPO (27.8.1): 0 DO on PAD0, 1 on PAD2, 2 on PAD3, 3 on PAD0.
+unsigned Sercom::data_out_pad() const {
+  constexpr unsigned kPad[4] = {0, 2, 3, 0};
+  return kPad[(ctrla_ >> 16) & 3];
+}
+
+// MSB first unless CTRLA.DORD (bit 30) asks for LSB first (27.6.2.x "Data Register").
+bool Sercom::pad_output(unsigned pad) const {
+  if (!enabled() || !spi() || pad != data_out_pad()) return false;
+  if (!shifting_ || shift_done_ps_ == UINT64_MAX) return last_bit_;
+  const uint64_t now = chip_.now_ps();
+  const uint64_t bit_ps = (shift_done_ps_ - shift_start_ps_) / 8;
+  uint64_t bit = now <= shift_start_ps_ || bit_ps == 0 ? 0 : (now - shift_start_ps_) / bit_ps;
+  if (bit > 7) bit = 7;
+  const unsigned shift = (ctrla_ & (1u << 30)) != 0 ? static_cast<unsigned>(bit) : 7u - static_cast<unsigned>(bit);
+  return ((shift_byte_ >> shift) & 1) != 0;
+}
+
 void Sercom::start_shift() {
   shift_byte_ = *tx_buffer_;
   tx_buffer_.reset();
   shifting_ = true;
+  shift_start_ps_ = chip_.now_ps();
   const uint64_t span = byte_ps();
   shift_done_ps_ = span == UINT64_MAX ? UINT64_MAX : chip_.now_ps() + span;
 }
@@ -198,17 +218,25 @@ void Sercom::advance(uint64_t now_ps) {
     wire_next_ps_ += static_cast<uint64_t>(wire_byte);
   }
   while (shifting_ && shift_done_ps_ <= now_ps) {
+    // DRE is set: a DMA channel on this transmitter refills the buffer now, at the byte's end,
+    // even inside a CPU bus stall (the buffer fills while the shift register is still busy).
+    if (!tx_buffer_.has_value()) chip_.dma_trigger(index_);
     shifting_ = false;
     if (usart()) {
       output_.push_back(static_cast<char>(shift_byte_));
     } else {
-      const uint8_t in = chip_.board().spi_exchange(index_, static_cast<uint8_t>(shift_byte_));
+      const bool lsb_first = (ctrla_ & (1u << 30)) != 0;
+      const uint8_t in = chip_.board().spi_exchange(
+          index_, static_cast<uint8_t>(shift_byte_),
+          SpiBits{shift_start_ps_, (shift_done_ps_ - shift_start_ps_) / 8, data_out_pad(), lsb_first});
+      last_bit_ = ((shift_byte_ >> (lsb_first ? 7 : 0)) & 1) != 0;
       if ((ctrlb_ & (1u << 17)) != 0) receive(in, 0);
     }
     if (tx_buffer_.has_value()) {
       const uint64_t done = shift_done_ps_;
       start_shift();
       if (shift_done_ps_ != UINT64_MAX) shift_done_ps_ = done + (shift_done_ps_ - now_ps);
+      shift_start_ps_ = done;  // back to back: the next byte starts as this one ends
     } else {
       txc_ = kTxc;
     }

@@ -31,11 +31,15 @@ class Sercom : public Peripheral, public Timed {
   // For the DMAC: the DRE trigger and a DATA write.
   bool data_empty() const { return enabled() && !tx_buffer_.has_value(); }
   void dma_write(uint8_t byte) { write_data(byte); }
+  // SPI master: the level on PAD[pad] now (the data-out pad while a byte shifts out, its last bit
+  // between bytes); false for any other pad or mode.
+  bool pad_output(unsigned pad) const;
 
  private:
   bool enabled() const { return (ctrla_ & 2) != 0; }
   bool usart() const { return ((ctrla_ >> 2) & 7) == 1; }
   bool spi() const { return ((ctrla_ >> 2) & 7) == 3; }
+  unsigned data_out_pad() const;
   uint8_t intflag() const;
   uint64_t byte_ps() const;
   void write_data(uint16_t byte);
@@ -53,6 +57,8 @@ class Sercom : public Peripheral, public Timed {
   bool shifting_ = false;
   uint16_t shift_byte_ = 0;
   uint64_t shift_done_ps_ = 0;
+  uint64_t shift_start_ps_ = 0;
+  bool last_bit_ = false;  // SPI: the data-out level after the last byte
   std::deque<std::pair<uint16_t, uint16_t>> rx_fifo_;  // byte, STATUS bits it brings
   std::deque<uint8_t> wire_;                           // host bytes not yet on the wire
   uint64_t wire_next_ps_ = 0;                          // when the next host byte completes

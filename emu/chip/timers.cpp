@@ -1,15 +1,21 @@
 // TC and TCC (timers.h).
 #include "timers.h"
 
+#include <algorithm>
+
 #include "../board/board.h"
 
 namespace hmc::emu {
+
+using samd21::port_functions::Unit;
+
 namespace {
 // CTRLA.PRESCALER (30.8.1): DIV1, 2, 4, 8, 16, 64, 256, 1024.
 constexpr uint64_t kPrescaler[8] = {1, 2, 4, 8, 16, 64, 256, 1024};
 constexpr uint8_t kOvf = 1, kMc0 = 1u << 4, kMc1 = 1u << 5;
 // Enable-protected CTRLA fields (30.8.1): MODE, WAVEGEN, PRESCALER, RUNSTDBY, PRESCSYNC.
 constexpr uint16_t kCtrlAProtected = 0x3F7C;
+constexpr unsigned kTc3ClockId = 0x1B;  // GCLK_TCC2_TC3: TC3 drives the buzzer's pin
 }  // namespace
 
 Tc::Tc(Chip& chip, std::string name, unsigned clock_id)
@@ -48,7 +54,7 @@ void Tc::rebase() {
 
 uint64_t Tc::output_hz() const {
   if (!running() || !mfrq()) return 0;
-  return tick_hz() / (2 * modulus());
+  return (tick_hz() + modulus()) / (2 * modulus());  // rounded
 }
 
 // 30.6.2.5: MCx is set when the counter equals CCx; OVF when it wraps past its top.
@@ -126,6 +132,7 @@ void Tc::write(uint32_t offset, uint32_t value, unsigned size) {
     const uint16_t v = static_cast<uint16_t>(view.get(0, 2));
     if ((v & 1) != 0) {
       reset_registers();
+      if (clock_id_ == kTc3ClockId) chip_.board().tone_source_changed();
       chip_.irq_changed();
       chip_.reschedule();
       return;
@@ -187,66 +194,264 @@ void Tc::write(uint32_t offset, uint32_t value, unsigned size) {
       checked_position_ = base_position_;
     }
   }
+  if (clock_id_ == kTc3ClockId) chip_.board().tone_source_changed();
   chip_.irq_changed();
   chip_.reschedule();
 }
 
-// ---- TCC0: CTRLA 0x00 (ENABLE 1, PRESCALER 10:8), SYNCBUSY 0x08, WAVE 0x3C, PER 0x40,
-// CC0-3 0x44-0x50, PERB 0x6C, CCB0-3 0x70-0x7C (datasheet 31.8). Buffered values (PERB, CCBx)
-// are copied at the period's end (31.6.2.6); here at once — the pulse in progress is not cut.
+// ---- TCC0 (datasheet chapter 31; register offsets and reset values from Microchip's register
+// description): CTRLA 0x00, CTRLBCLR 0x04, CTRLBSET 0x05, SYNCBUSY 0x08, WEXCTRL 0x14, DRVCTRL
+// 0x18, INTENCLR 0x24, INTENSET 0x28, INTFLAG 0x2C, STATUS 0x30, COUNT 0x34, PATT 0x38, WAVE 0x3C,
+// PER 0x40, CC0-3 0x44-0x50, PERB 0x6C, CCB0-3 0x70-0x7C.
+namespace {
+constexpr uint32_t kTccClockId = 0x1A;  // GCLK_TCC0_TCC1 (HARDWARE.md)
+constexpr uint32_t kTccOvf = 1;
+constexpr uint32_t kPerbv = 1u << 7;
+constexpr uint32_t ccbv(unsigned n) { return 1u << (16 + n); }
+constexpr uint8_t kLupd = 1u << 1;
+constexpr uint32_t kWaveNpwm = 2;
+}  // namespace
+
+Tcc::Tcc(Chip& chip) : chip_(chip) { reset_registers(); }
+
+void Tcc::reset_registers() {
+  ctrla_ = 0;
+  ctrlb_ = 0;
+  wave_ = 0;
+  per_ = perb_ = 0xFFFFFF;  // PER/PERB reset: all ones, 24 bits used
+  for (unsigned c = 0; c < 4; ++c) cc_[c] = ccb_[c] = 0;
+  buffer_valid_ = inten_ = intflag_ = count_ = 0;
+  other_ = RegisterBytes(0x80);
+  hz_ = 0;
+  period_start_ = processed_ = 0;
+  for (bool& l : level_) l = false;
+  next_ps_ = UINT64_MAX;
+}
 
 uint64_t Tcc::tick_hz() const {
-  return chip_.channel_hz(0x1A) / kPrescaler[(regs_.get(0, 4) >> 8) & 7];
+  return chip_.channel_hz(kTccClockId) / kPrescaler[(ctrla_ >> 8) & 7];
 }
 
-uint32_t Tcc::pulse_us(unsigned channel) const {
-  const uint64_t hz = tick_hz();
-  if (!enabled() || hz == 0) return 0;
-  return static_cast<uint32_t>(uint64_t{regs_.get(0x44 + 4 * channel, 4)} * 1000000 / hz);
+uint64_t Tcc::tick_at(uint64_t ps) const {
+  return hz_ == 0 || ps <= enable_ps_ ? 0 : mul_div(ps - enable_ps_, hz_, Chip::kPsPerSecond);
 }
 
-uint32_t Tcc::period_us() const {
-  const uint64_t hz = tick_hz();
-  if (!enabled() || hz == 0) return 0;
-  return static_cast<uint32_t>((uint64_t{regs_.get(0x40, 4)} + 1) * 1000000 / hz);
+uint64_t Tcc::ps_at(uint64_t tick) const {
+  return enable_ps_ + static_cast<uint64_t>((static_cast<Wide>(tick) * Chip::kPsPerSecond + hz_ - 1) / hz_);
+}
+
+bool Tcc::output(unsigned wo) {
+  advance(chip_.now_ps());
+  return enabled() && level_[wo % 4];
+}
+
+void Tcc::set_output(unsigned channel, bool level, uint64_t ps) {
+  if (level_[channel] == level) return;
+  level_[channel] = level;
+  // Output matrix with WEXCTRL.OTMX = 0 (31.6.3.x "Waveform Extension", Output Matrix table):
+  // WO[n] and WO[n + 4] both follow CC[n].
+  chip_.board().peripheral_edge(Unit::kTcc, 0, channel, level, ps);
+  chip_.board().peripheral_edge(Unit::kTcc, 0, channel + 4, level, ps);
+}
+
+// "Double Buffering" (31.6.2.6): at the UPDATE condition — the counter wrapping at TOP, in
+// up-counting single-slope operation — each buffer whose valid flag is set is copied into its
+// register and the flag cleared, unless CTRLB.LUPD locks the update.
+void Tcc::apply_buffers() {
+  if ((ctrlb_ & kLupd) != 0) return;
+  if ((buffer_valid_ & kPerbv) != 0) per_ = perb_;
+  for (unsigned c = 0; c < 4; ++c) {
+    if ((buffer_valid_ & ccbv(c)) != 0) cc_[c] = ccb_[c];
+  }
+  buffer_valid_ = 0;
+}
+
+// "Single-Slope PWM Generation" (31.6.2.5): the counter counts from ZERO to TOP (PER), then wraps
+// to ZERO, setting INTFLAG.OVF; in NPWM the waveform output is set at ZERO and cleared on the
+// compare match with CCx (a CCx of 0 keeps it low; one above TOP keeps it high). A compare value
+// changed below the counter does not match until the next period: the output stays as it is.
+void Tcc::advance(uint64_t now_ps) {
+  if (!enabled() || hz_ == 0 || now_ps < next_ps_) return;
+  // Enabled means NPWM: enabling in another mode, or writing WAVE while enabled, stops the
+  // emulator (write()).
+  const uint64_t now = tick_at(now_ps);
+  while (true) {
+    const uint64_t end = period_start_ + period();  // the tick of the next wrap
+    const uint64_t upto = now < end ? now : end - 1;
+    for (unsigned c = 0; c < 4; ++c) {
+      const uint64_t match = period_start_ + cc_[c];
+      if (cc_[c] != 0 && match > processed_ && match <= upto) set_output(c, false, ps_at(match));
+    }
+    if (upto > processed_) processed_ = upto;
+    if (now < end) break;
+    intflag_ |= kTccOvf;
+    chip_.irq_changed();
+    apply_buffers();
+    period_start_ = end;
+    processed_ = end;
+    for (unsigned c = 0; c < 4; ++c) set_output(c, cc_[c] != 0, ps_at(end));
+  }
+  plan_next();
+}
+
+void Tcc::plan_next() {
+  next_ps_ = UINT64_MAX;
+  if (!enabled() || hz_ == 0) return;
+  uint64_t next = period_start_ + period();
+  for (unsigned c = 0; c < 4; ++c) {
+    const uint64_t match = period_start_ + cc_[c];
+    if (cc_[c] != 0 && match > processed_ && match < next) next = match;
+  }
+  next_ps_ = ps_at(next);
 }
 
 uint32_t Tcc::read(uint32_t offset, unsigned size) {
-  regs_.set(0x08, 0, 4);  // SYNCBUSY: each write's delay is charged as a stall
-  return regs_.get(offset, size);
+  advance(chip_.now_ps());
+  RegisterBytes view = other_;
+  view.set(0x00, ctrla_, 4);
+  view.set(0x04, ctrlb_, 1);
+  view.set(0x05, ctrlb_, 1);
+  view.set(0x08, 0, 4);  // SYNCBUSY: each synchronised write's delay is charged as a stall
+  view.set(0x24, inten_, 4);
+  view.set(0x28, inten_, 4);
+  view.set(0x2C, intflag_, 4);
+  view.set(0x30, buffer_valid_ | (enabled() ? 0u : 1u), 4);  // STATUS.STOP while disabled
+  view.set(0x34, count_, 4);
+  view.set(0x3C, wave_, 4);
+  view.set(0x40, per_, 4);
+  for (unsigned c = 0; c < 4; ++c) view.set(0x44 + 4 * c, cc_[c], 4);
+  view.set(0x6C, perb_, 4);
+  for (unsigned c = 0; c < 4; ++c) view.set(0x70 + 4 * c, ccb_[c], 4);
+  return view.get(offset, size);
 }
 
 void Tcc::write(uint32_t offset, uint32_t value, unsigned size) {
+  advance(chip_.now_ps());
+  // No edge lies between the last one applied and now (advance() stops short of the next), so
+  // the counter is known to be past now's count: a compare value written below it must not
+  // match in this period.
+  if (enabled() && hz_ != 0) processed_ = std::max(processed_, tick_at(chip_.now_ps()));
+  RegisterBytes w(0x80);
+  w.set(offset, value, size);
+  const uint64_t sync_hz = chip_.channel_hz(kTccClockId);
+  const auto stall = [&] {
+    if (sync_hz != 0) chip_.charge_stall(5, sync_hz);  // write-synchronised (31.6.8)
+  };
+  const uint64_t now_ps = chip_.now_ps();
   if (touches(offset, size, 0x00, 4)) {
     RegisterBytes view(4);
-    view.set(0, regs_.get(0, 4), 4);
+    view.set(0, ctrla_, 4);
     view.set(offset, value, size);
     const uint32_t v = view.get(0, 4);
-    if ((v & 1) != 0) {
-      regs_ = RegisterBytes(0x80);
-      regs_.set(0x40, 0xFFFFFF, 4);  // PER reset (SVD: all ones, 24 bits used)
+    if ((v & 1) != 0) {  // SWRST: every register to its reset value, the TCC disabled (31.8.1)
+      for (unsigned c = 0; c < 4; ++c) set_output(c, false, now_ps);
+      reset_registers();
+      stall();
+      chip_.irq_changed();
+      chip_.reschedule();
       return;
     }
-    if (enabled() && ((v ^ regs_.get(0, 4)) & ~3u) != 0) {
+    if (enabled() && ((v ^ ctrla_) & ~3u) != 0) {
       chip_.violation("write to TCC0 CTRLA's enable-protected fields while enabled "
                       "(datasheet 31.8.1)");
       return;
     }
+    const bool was = enabled();
+    ctrla_ = v;
+    if (!was && enabled()) {
+      hz_ = tick_hz();
+      if (hz_ == 0) {
+        chip_.violation("TCC0 enabled without its generic clock (GCLK channel 0x1A off; datasheet 31.5.3)");
+        return;
+      }
+      if ((wave_ & 7) != kWaveNpwm) {
+        chip_.violation("TCC0 waveform modes other than NPWM are not modelled (WAVE.WAVEGEN " +
+                        std::to_string(wave_ & 7) + ")");
+        return;
+      }
+      // The counter starts from COUNT (0 after a reset) when enabled (31.6.2.3).
+      enable_ps_ = now_ps;
+      period_start_ = processed_ = 0;
+      for (unsigned c = 0; c < 4; ++c) set_output(c, cc_[c] != 0, now_ps);
+    } else if (was && !enabled()) {
+      for (unsigned c = 0; c < 4; ++c) set_output(c, false, now_ps);
+    }
+    stall();
   }
-  if (touches(offset, size, 0x3C, 4) && enabled()) {
-    chip_.violation("write to TCC0 WAVE while enabled (datasheet 31.8.11: enable-protected)");
-    return;
-  }
-  regs_.set(offset, value, size);
-  for (unsigned channel = 0; channel < 4; ++channel) {
-    if (touches(offset, size, 0x70 + 4 * channel, 4)) {
-      regs_.set(0x44 + 4 * channel, regs_.get(0x70 + 4 * channel, 4), 4);
+  if (touches(offset, size, 0x04, 1)) ctrlb_ &= static_cast<uint8_t>(~w.get(0x04, 1));
+  if (touches(offset, size, 0x05, 1)) {
+    const uint8_t v = static_cast<uint8_t>(w.get(0x05, 1));
+    ctrlb_ |= static_cast<uint8_t>(v & 0x1F);
+    const unsigned command = v >> 5;
+    if ((ctrlb_ & 1) != 0 || (ctrlb_ & 4) != 0) {
+      chip_.violation("TCC0 down-counting and one-shot operation (CTRLB.DIR, ONESHOT) are not modelled");
+      return;
+    }
+    stall();
+    if (command == 4) {
+      // READSYNC (31.8.3): COUNT is synchronised for reading; the bus waits for it (above).
+      count_ = static_cast<uint32_t>(enabled() ? tick_at(chip_.now_ps()) - period_start_ : count_);
+    } else if (command == 3) {
+      apply_buffers();  // UPDATE: the buffers now, as at a period's end
+    } else if (command != 0) {
+      chip_.violation("TCC0 CTRLBSET.CMD " + std::to_string(command) + " (RETRIGGER/STOP) is not modelled");
+      return;
     }
   }
-  if (touches(offset, size, 0x6C, 4)) regs_.set(0x40, regs_.get(0x6C, 4), 4);
-  const uint64_t hz = chip_.channel_hz(0x1A);
-  if (hz != 0) chip_.charge_stall(5, hz);
-  chip_.board().servos_changed();
+  if (touches(offset, size, 0x14, 4) || touches(offset, size, 0x18, 4) || touches(offset, size, 0x38, 2)) {
+    if (w.get(offset, size) != 0) {
+      chip_.violation("TCC0 WEXCTRL, DRVCTRL and PATT (output matrix, dead time, inversion, "
+                      "patterns) are not modelled: written non-zero");
+      return;
+    }
+  }
+  if (touches(offset, size, 0x24, 4)) inten_ &= ~w.get(0x24, 4);
+  if (touches(offset, size, 0x28, 4)) inten_ |= w.get(0x28, 4);
+  if (touches(offset, size, 0x2C, 4)) intflag_ &= ~w.get(0x2C, 4);  // write 1 to clear
+  if (touches(offset, size, 0x34, 4)) {
+    stall();
+    const uint64_t now = tick_at(now_ps);
+    const uint32_t v = w.get(0x34, 4) & 0xFFFFFF;
+    period_start_ = now >= v ? now - v : 0;
+    processed_ = now;
+  }
+  if (touches(offset, size, 0x3C, 4)) {
+    if (enabled()) {
+      chip_.violation("write to TCC0 WAVE while enabled (datasheet 31.8.11: enable-protected)");
+      return;
+    }
+    wave_ = w.get(0x3C, 4);
+    stall();
+  }
+  // PER and CCx written directly take effect at once; PERB and CCBx wait for the period's end
+  // ("Double Buffering", 31.6.2.6).
+  if (touches(offset, size, 0x40, 4)) {
+    per_ = w.get(0x40, 4) & 0xFFFFFF;
+    stall();
+  }
+  for (unsigned c = 0; c < 4; ++c) {
+    if (touches(offset, size, 0x44 + 4 * c, 4)) {
+      cc_[c] = w.get(0x44 + 4 * c, 4) & 0xFFFFFF;
+      stall();
+    }
+    if (touches(offset, size, 0x70 + 4 * c, 4)) {
+      ccb_[c] = w.get(0x70 + 4 * c, 4) & 0xFFFFFF;
+      buffer_valid_ |= ccbv(c);
+      stall();
+    }
+  }
+  if (touches(offset, size, 0x6C, 4)) {
+    perb_ = w.get(0x6C, 4) & 0xFFFFFF;
+    buffer_valid_ |= kPerbv;
+    stall();
+  }
+  plan_next();
+  for (uint32_t o = offset; o < offset + size; ++o) {
+    const bool modelled = o < 0x0C || (o >= 0x24 && o < 0x38) || (o >= 0x3C && o < 0x54) || o >= 0x6C;
+    if (!modelled) other_.set(o, w.get(o, 1), 1);
+  }
+  chip_.irq_changed();
+  chip_.reschedule();
 }
 
 }  // namespace hmc::emu

@@ -47,20 +47,48 @@ class Tc : public Peripheral, public Timed {
   uint64_t checked_position_ = 0;  // flags are up to date through this position
 };
 
-class Tcc : public Peripheral {
+// TCC0 as the image uses it: a single-slope counter from 0 to PER (NPWM, WAVE.WAVEGEN = 2), the
+// compare channels' waveform outputs WO[0..7] (WO[n] follows CC[n % 4] with WEXCTRL.OTMX = 0),
+// double-buffered PER and CCx (PERB/CCBx copied at the period's end unless CTRLB.LUPD), OVF,
+// and the READSYNC command that makes COUNT readable. Edges are computed period by period and
+// handed to the board with their exact times. Datasheet (DS40001882) chapter 31.
+class Tcc : public Peripheral, public Timed {
  public:
-  explicit Tcc(Chip& chip) : chip_(chip) {}
+  explicit Tcc(Chip& chip);
   uint32_t read(uint32_t offset, unsigned size) override;
   void write(uint32_t offset, uint32_t value, unsigned size) override;
-  // Pulse width of compare channel `channel` in µs, and the period in µs (0 when stopped).
-  uint32_t pulse_us(unsigned channel) const;
-  uint32_t period_us() const;
+  void advance(uint64_t now_ps) override;
+  uint64_t next_event_ps() const override { return next_ps_; }
+  bool irq() const { return (intflag_ & inten_) != 0; }
+  // The level of waveform output WO[wo] now (low while disabled).
+  bool output(unsigned wo);
 
  private:
-  bool enabled() const { return (regs_.get(0, 4) & 2) != 0; }
+  bool enabled() const { return (ctrla_ & 2) != 0; }
   uint64_t tick_hz() const;
+  uint64_t tick_at(uint64_t ps) const;  // counter ticks since the enable
+  uint64_t ps_at(uint64_t tick) const;
+  uint64_t period() const { return uint64_t{per_} + 1; }
+  void set_output(unsigned channel, bool level, uint64_t ps);
+  void apply_buffers();
+  void reset_registers();
+
   Chip& chip_;
-  RegisterBytes regs_{0x80};
+  uint32_t ctrla_ = 0;
+  uint8_t ctrlb_ = 0;  // DIR 0, LUPD 1, ONESHOT 2
+  uint32_t wave_ = 0, per_ = 0xFFFFFF, perb_ = 0xFFFFFF;
+  uint32_t cc_[4] = {}, ccb_[4] = {};
+  uint32_t buffer_valid_ = 0;  // STATUS.PERBV (bit 7), CCBVx (bits 16-19)
+  uint32_t inten_ = 0, intflag_ = 0;
+  uint32_t count_ = 0;         // COUNT as the last READSYNC left it
+  RegisterBytes other_{0x80};  // registers kept for reading back only
+  uint64_t enable_ps_ = 0;
+  uint64_t hz_ = 0;            // counter clock while enabled
+  uint64_t period_start_ = 0;  // tick at which the current period began
+  uint64_t processed_ = 0;     // edges through this tick have been applied
+  bool level_[4] = {};
+  uint64_t next_ps_ = UINT64_MAX;  // the next edge or wrap (nothing changes before it)
+  void plan_next();
 };
 
 }  // namespace hmc::emu

@@ -119,6 +119,42 @@ TEST_CASE("the multiplexing table agrees with the rows the libraries rely on") {
   }
 }
 
+// The rows the strips, servos and buzzer use, against a second transcription of the datasheet's
+// multiplexing table: Microchip's SAMD21 device headers (include/pio/samd21*.h of the device
+// pack, Apache-2.0), whose PIN_<pin><function>_<signal> / MUX_<...> macros give the function as
+// a number, A = 0 ... H = 7: MUX_PA15C_SERCOM2_PAD3 2, MUX_PA19C_SERCOM1_PAD3 2,
+// MUX_PA18F_TCC0_WO2 5, MUX_PA22F_TCC0_WO4 5, MUX_PA14E_TC3_WO0 4. hmc-emu routes these signals
+// to the strips, servos and buzzer through the same table (emu/chip/port.cpp).
+TEST_CASE("the seed's strip, servo and buzzer pins carry the signals Microchip's pin headers name") {
+  struct HeaderRow {
+    Role role;
+    Pin pin;
+    uint32_t mux;  // MUX_... value
+    port_functions::Unit unit;
+    uint8_t instance, index;
+  };
+  const HeaderRow rows[] = {
+      {Role::kStrip1, pa(15), 2, port_functions::Unit::kSercom, 2, 3},
+      {Role::kStrip2, pa(19), 2, port_functions::Unit::kSercom, 1, 3},
+      {Role::kServo1, pa(18), 5, port_functions::Unit::kTcc, 0, 2},
+      {Role::kServo2, pa(22), 5, port_functions::Unit::kTcc, 0, 4},
+      {Role::kBuzzer, pa(14), 4, port_functions::Unit::kTc, 3, 0},
+  };
+  for (const HeaderRow& h : rows) {
+    INFO(role_name(h.role));
+    const PinAssignment& a = *find(boards::kSeed, h.role);
+    CHECK(a.pin == h.pin);
+    CHECK(static_cast<uint32_t>(a.function - 'A') == h.mux);
+    CHECK((a.unit == h.unit && a.instance == h.instance && a.index == h.index));
+    CHECK(port_functions::pin_has(h.pin.group, h.pin.number, static_cast<char>('A' + h.mux), h.unit, h.instance,
+                                  h.index));
+  }
+  // The strips' data on PAD3 needs DOPO 2 (DO on PAD3); the servos' WO[2] and WO[4] follow CC2
+  // and CC0 (WO[n] follows CC[n % 4]), two different compare channels.
+  CHECK(spi_dopo_data_only(3) == 2);
+  CHECK(find(boards::kSeed, Role::kServo1)->index % 4 != find(boards::kSeed, Role::kServo2)->index % 4);
+}
+
 TEST_CASE("a broken table is refused, naming what is wrong") {
   SECTION("a pin twice") {
     Edited e([](auto& rows) { row_of(rows, Role::kEmergency).pin = pa(15); });
