@@ -31,7 +31,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-using detail::UniqueFd;
 
 // The image's power-up self-test (each stepper half a turn out and back at 250 µs a step:
 // docs/protocol.md, "Boot") is over by then, so the board is idle when the host's first byte
