@@ -315,14 +315,8 @@ void BoardWorker::open_file(const std::string& path) {
     if (session_) {
       options.firmware = session_->firmware() == Firmware::kSeed ? motion::TargetFirmware::kSeed : motion::TargetFirmware::kV2;
       options.budgets = session_->step_budgets_in_force();
-      if (session_->firmware() == Firmware::kV2) {
-        // Absolute moves start from where the board says each motor is.
-        for (const motion::MotorConfig& mc : file->motors) {
-          const MotorStatus& status = session_->model().motor(mc.motor);
-          options.start_position[mc.motor - 1] =
-              static_cast<int64_t>(std::llround(static_cast<double>(status.position) * mc.microstep / 256.0));
-        }
-      }
+      // Absolute moves start from where the board says each motor is (its fraction of a step kept).
+      motion::start_where_board_is(*session_, *file, options);
     }
     auto plan = motion::plan_motion(*file, options);
     if (!plan) {

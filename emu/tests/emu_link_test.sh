@@ -55,8 +55,13 @@ sim_port="sim://link?fresh&fast"
 
 # 1. A ramped move, waited for: the same report as hmc-sim's (both boards start with motor 1 at
 # 0 and idle: emu:// lets the image's power-up self-test finish first).
-emu_out=$("$hmc" --port "$emu_port" --timeout 5000 move 1 3200 --accel 8000 --wait 2>"$work/move.err")
+# The board's trace (trace=) shows the steps on the STEP pin: with the axis starting at 102400
+# (1/256 step), the last at 102400 + 3200 × 16.
+emu_out=$("$hmc" --port "$emu_port&axis=1:0:409600:102400&trace=$work/move.trace" --timeout 5000 \
+  move 1 3200 --accel 8000 --wait 2>"$work/move.err")
 emu_code=$?
+check "move --wait: trace= gives the STEP pin's last position" '"pos":153600}' \
+  "$(grep '"ev":"step","motor":1,' "$work/move.trace" | tail -n 1 | grep -o '"pos":[-0-9]*}')"
 sim_out=$("$hmc" --port "$sim_port" move 1 3200 --accel 8000 --wait 2>/dev/null)
 sim_code=$?
 check "move --wait: exit code as hmc-sim's" "$sim_code" "$emu_code"

@@ -4,6 +4,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <iterator>
 #include <string>
 
 #include "core/frame_parser.h"
@@ -53,10 +54,11 @@ TEST_CASE("in CRC-16 mode the checksum field is always 5 digits, zero-padded") {
 
 TEST_CASE("large values print in full and the sum wraps at 256") {
   CapturePort port;
-  const uint32_t values[] = {2, 2147483647u, 0, 128, 50000, 322, 3, 0};
+  const uint32_t values[] = {2, 2147483647u, 0, 128, 50000, 322, 3, 0, 40000};
+  static_assert(std::size(values) == std::size(hmc::proto::kVersionFields));
   hmc::fw::write_frame(port, hmc::proto::BoardFrameId::kVersion, values, hmc::proto::ChecksumMode::kSum);
-  // 2 + 2147483647 + 128 + 50000 + 322 + 3 = 2147534102; mod 256 = 22.
-  CHECK(port.text == "STX#9#VER#2#2147483647#0#128#50000#322#3#0#22#ETX\n");
+  // 2 + 2147483647 + 128 + 50000 + 322 + 3 + 40000 = 2147574102; mod 256 = 86.
+  CHECK(port.text == "STX#10#VER#2#2147483647#0#128#50000#322#3#0#40000#86#ETX\n");
 }
 
 TEST_CASE("put_signed splits a position into sign and magnitude") {

@@ -257,9 +257,12 @@ Result<EmuPortOptions> parse_emu_url(std::string_view url) {
     } else if (key == "control") {
       if (value.empty()) return needs_value("control=HOST:PORT");
       options.control = value;
+    } else if (key == "trace") {
+      if (value.empty()) return needs_value("trace=FILE");
+      options.trace = value;
     } else {
       return Error{std::string(url) + ": unknown option '" + std::string(key) +
-                   "' (the options are fast, nocrystal, axis=M:LOW:HIGH:START and control=HOST:PORT)"};
+                   "' (the options are fast, nocrystal, axis=M:LOW:HIGH:START, control=HOST:PORT and trace=FILE)"};
     }
   }
   return options;
@@ -284,6 +287,7 @@ Result<std::unique_ptr<Transport>> open_emu_port(std::string_view url, const Por
   if (options.no_crystal) args.emplace_back("--no-crystal");
   for (const std::string& axis : options.axes) args.insert(args.end(), {"--axis", axis});
   if (!options.control.empty()) args.insert(args.end(), {"--control", options.control});
+  if (!options.trace.empty()) args.insert(args.end(), {"--trace", options.trace});
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);

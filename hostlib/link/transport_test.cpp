@@ -349,9 +349,10 @@ TEST_CASE("parse_emu_url splits the image and the options") {
   CHECK(plain->image.empty());
   CHECK_FALSE(plain->fast);
   auto full = hmc::parse_emu_url("emu:///opt/fw/hmc-firmware.elf?fast&nocrystal&axis=1:0:409600:12800&axis=2:0:1000:500"
-                                 "&control=127.0.0.1:4001");
+                                 "&control=127.0.0.1:4001&trace=out/board.jsonl");
   REQUIRE(full.ok());
   CHECK(full->image == "/opt/fw/hmc-firmware.elf");
+  CHECK(full->trace == "out/board.jsonl");
   CHECK(full->fast);
   CHECK(full->no_crystal);
   CHECK(full->axes == std::vector<std::string>{"1:0:409600:12800", "2:0:1000:500"});

@@ -39,6 +39,7 @@ struct EmuPortOptions {
   bool no_crystal = false;
   std::vector<std::string> axes;   // M:LOW:HIGH:START, checked by hmc-emu
   std::string control;             // HOST:PORT, checked by hmc-emu
+  std::string trace;               // FILE for hmc-emu --trace (relative to the current directory)
 };
 
 // Splits the URL; an unknown option or a value where none belongs is an error naming it.
