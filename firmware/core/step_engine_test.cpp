@@ -17,20 +17,23 @@ struct ClockPort {
   static constexpr uint32_t kCostTicks = 192;
   static constexpr uint32_t kCallTicks = 40;
   uint32_t clock = 0;
-  uint32_t entry = 0;
   uint32_t armed = 0;
+  bool fired = false;           // entered by the compare arm() set
   std::vector<uint32_t> rises;  // the clock at each STEP rise
 
+  bool event_fired(const StepEngine&) const { return fired; }
+  void ack_event() {}
+  uint32_t take_entry() { return clock; }
   void step_high(uint8_t) {
     clock += kCallTicks;
     rises.push_back(clock);
   }
-  uint32_t pulse_started() { return clock; }
-  void step_low(uint8_t, uint32_t since) { clock = since + hmc::fw::kStepHighTicks; }
+  uint32_t stopwatch() { return clock; }
+  uint32_t elapsed(uint32_t mark) { return clock - mark; }
+  void step_low(uint8_t, uint32_t mark) { wait_for(mark, hmc::fw::kStepHighTicks); }
   void set_dir(uint8_t, bool) { clock += kCallTicks; }
-  uint32_t elapsed() { return clock - entry; }
-  void wait_for(uint32_t ticks) {
-    if (clock - entry < ticks) clock = entry + ticks;
+  void wait_for(uint32_t mark, uint32_t ticks) {
+    if (clock - mark < ticks) clock = mark + ticks;
   }
   void arm(uint32_t when) { armed = when; }
 };
@@ -53,9 +56,10 @@ TEST_CASE("step interrupt: events waited for inside one entry come at their time
   ClockPort port;
   uint32_t now = 10000;
   for (int entries = 0; entries < 10 && port.rises.size() < due.size(); ++entries) {
-    port.clock = port.entry = now;
+    port.clock = now;
+    port.fired = entries > 0;  // the first entry is the main loop's kick (e.pending)
     port.armed = 0;
-    hmc::fw::run_step_interrupt(e, port, now);
+    hmc::fw::run_step_interrupt(e, port);
     if (port.armed == 0) break;
     now = port.armed;
   }

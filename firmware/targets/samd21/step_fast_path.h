@@ -23,6 +23,7 @@
 #include "reg_access.h"
 #include "regs_port.h"
 #include "regs_system.h"
+#include "regs_timer.h"
 #include "step_timer.h"
 
 namespace hmc::samd21 {
@@ -53,44 +54,54 @@ inline constexpr uint32_t kIobusB = port::kIobusBase + port::kGroupStride;
 
 class Samd21StepPort {
  public:
-  // The interrupt's exit, the next entry and the work before the compare is live (an estimate
-  // to be replaced by the emulator's measured cycles); a closer event is waited for.
+  // From a compare value written to the interrupt at that time on a fast-path entry: the
+  // rest of the pass, the compare's synchronisation (5 GCLK periods, datasheet "TC",
+  // "Synchronization"), the exit and the next entry, with a margin: an event closer than this
+  // is waited for inside the interrupt.
   static constexpr uint32_t kCostTicks = 192;
 
-  Samd21StepPort(StepTimer& timer, uint32_t entry) : timer_(timer), entry_(entry) {}
+  explicit Samd21StepPort(StepTimer& timer) : timer_(timer) {}
+
+  // The armed compare, no overflow to count (INTFLAG's other flags are not interrupts here).
+  bool event_fired(const fw::StepEngine&) {
+    return (r8(kTc + tc::kIntFlag) & (tc::kIntOvf | tc::kIntMc0)) == tc::kIntMc0;
+  }
+  void ack_event() { r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntMc0); }
+  uint32_t take_entry() { return timer_.take_step_interrupt(); }
 
   void step_high(uint8_t motors) {
     using namespace step_fast_path_detail;
     r32(kIobusA + port::kOutSet) = kGroupA.of[motors];
     if (kAnyOnB) r32(kIobusB + port::kOutSet) = kGroupB.of[motors];
   }
-  uint32_t pulse_started() { return r32(systick::kCvr); }
-  void step_low(uint8_t motors, uint32_t since) {
+  // SysTick counts down through 24 bits: marks are its raw values, differences masked.
+  uint32_t stopwatch() { return r32(systick::kCvr); }
+  uint32_t elapsed(uint32_t mark) { return (mark - r32(systick::kCvr)) & 0xFFFFFFu; }
+  void step_low(uint8_t motors, uint32_t mark) {
     using namespace step_fast_path_detail;
-    while (((since - r32(systick::kCvr)) & 0xFFFFFFu) < fw::kStepHighTicks) {
+    while (elapsed(mark) < fw::kStepHighTicks) {
     }
     r32(kIobusA + port::kOutClr) = kGroupA.of[motors];
     if (kAnyOnB) r32(kIobusB + port::kOutClr) = kGroupB.of[motors];
   }
   void set_dir(uint8_t index, bool reverse) { pin_set(board::kDrivers[index].dir, reverse); }
-  uint32_t elapsed() { return (entry_ - r32(systick::kCvr)) & 0xFFFFFFu; }
-  void wait_for(uint32_t ticks) {
-    while (elapsed() < ticks) {
+  void wait_for(uint32_t mark, uint32_t ticks) {
+    while (elapsed(mark) < ticks) {
     }
   }
-  void arm(uint32_t when) { timer_.arm(when); }
+  // No wait for the write's synchronisation: the pulse's wait covers it, and a later write to
+  // the timer stalls until it is done.
+  void arm(uint32_t when) { r32(kTc + tc::kCc0) = when; }
 
  private:
+  static constexpr uint32_t kTc = tc::kTc4;
   StepTimer& timer_;
-  uint32_t entry_;  // SysTick at the interrupt's entry
 };
 
-// The step timer's interrupt: counts an overflow, takes the entry time and plays the rings.
-inline void run_step_fast_path(StepTimer& timer, fw::StepEngine& engine) {
-  const uint32_t entry = r32(systick::kCvr);
-  const uint32_t now = timer.take_step_interrupt();
-  Samd21StepPort port(timer, entry);
-  fw::run_step_interrupt(engine, port, now);
+// The step timer's interrupt: plays the rings (in RAM with its callees, main.cpp).
+HMC_STEP_INLINE void run_step_fast_path(StepTimer& timer, fw::StepEngine& engine) {
+  Samd21StepPort port(timer);
+  fw::run_step_interrupt(engine, port);
 }
 
 }  // namespace hmc::samd21
