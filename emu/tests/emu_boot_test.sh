@@ -17,7 +17,7 @@ require_built "$images/hmc-firmware.elf" "$images/hmc-firmware-nobl.elf"
 ver='STX#1#VER#0#ETX'
 boot_out="STX#3#EVB#6#100#106#ETX
 STX#6#EVR#1#0#0#0#0#1#ETX
-STX#9#VER#6#100#0#128#50000#322#3#0#127#ETX"
+STX#9#VER#6#100#0#128#75000#322#3#0#39#ETX"
 for image in hmc-firmware hmc-firmware-nobl; do
   for clock in "" --no-crystal; do
     name="$image${clock:+ $clock}"

@@ -221,10 +221,18 @@ static_assert(kSettingHomeLocate == kSettingCount, "one SettingId per kSettings 
 // Step rates our firmware can time (controller_motion.cpp applies them; the host names the one a
 // `rate_limit` refusal broke, with these numbers). A move's rate is 1 000 000 / delay_us steps/s,
 // rounded up; it must also stay within the motor's max_rate setting.
-// The step interrupt's budget, summed over the moving motors: set from the two-interrupt
-// scheduler's cost (≈ 750 cycles a step at constant rate, ≈ 1 170 with three motors ramping: near
-// 80 % of the 48 MHz M0+ at these sums; docs/performance.md). VER reports the first as max_rate.
-inline constexpr uint32_t kMaxStepRate = 50000;
+// The step budget, summed over the moving motors, from the real image's cycles in hmc-emu's
+// cycle model (docs/performance.md, "Cycles on the real image"; scripts/bench cycles). The rule:
+// the step interrupt uses at most half the 48 MHz CPU at the budget.
+//  - Constant rate: 287-309 cycles a step (one motor; three motors each on its own interrupt;
+//    273 when they share some): 75 000 x 309 = 23.2 M cycles/s, 48 % of the CPU. The spec's
+//    three 20 us moves at once (150 000 steps/s) would need 93 %: refused.
+//  - Ramping: the interrupt's 364-389 cycles a step (31 % at 40 000) plus the main loop's fill(),
+//    which computes each ramp step's time: 464-664 cycles a ramp step (median; 1 680-1 830 with
+//    the planning spikes in the mean; hmc-emu-bench --cycles, flash wait states not counted):
+//    at 40 000 the two take ≈ 1 050 cycles a step, 88 % of the CPU. Not raised.
+// VER reports the first as max_rate.
+inline constexpr uint32_t kMaxStepRate = 75000;
 inline constexpr uint32_t kMaxRampingStepRate = 40000;  // when any moving motor ramps
 // The step timer's shortest and longest interval at 48 ticks a µs: 240 ticks, 2^32 - 1 ticks.
 inline constexpr uint32_t kShortestDelayUs = 5;

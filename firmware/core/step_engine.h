@@ -248,18 +248,22 @@ HMC_STEP_INLINE void run_step_interrupt(StepEngine& engine, Port& port) {
   uint8_t due;
   uint8_t steps;
   uint32_t now;
-  if (port.event_fired(e) && load8(e.pending) == 0) {
+  const bool fired = port.event_fired(e) && load8(e.pending) == 0;
+  if (fired) {
     steps = e.next_steps;
     if (steps != 0) port.step_high(steps);
     port.ack_event();
     due = e.next_due;
     now = e.next_when;
   } else {
-    now = port.take_entry();
     if (load8(e.pending) != 0) {
       store8(e.pending, 0);
       take_requests(e);
     }
+    // The clock after the requests: the waits and the compare count from here (read before
+    // them, the time they took went uncounted and a compare could be written for a time
+    // already past, to be found only by the main loop's overdue check 1 ms later).
+    now = port.take_entry();
     due = 0;
 #pragma GCC unroll 3
     for (uint8_t i = 0; i < 3; ++i) {
@@ -277,6 +281,7 @@ HMC_STEP_INLINE void run_step_interrupt(StepEngine& engine, Port& port) {
   const uint32_t entry_mark = port.stopwatch();
   uint32_t mark = entry_mark;
   const uint32_t entry = now;
+  bool waited = !fired;  // a slow entry may wait for the event its compare is armed for
   for (;;) {
     // While the pulse is high: the due motors' DIR and next events.
 #pragma GCC unroll 3
@@ -318,6 +323,10 @@ HMC_STEP_INLINE void run_step_interrupt(StepEngine& engine, Port& port) {
       if (after_entry - static_cast<int32_t>(port.elapsed(entry_mark)) >=
           static_cast<int32_t>(Port::kCostTicks)) {
         port.arm(when);  // its synchronisation overlaps the rest of the pulse
+        // After a wait inside, the old compare (an event this interrupt has made) may have
+        // matched meanwhile: its flag would bring the next entry in early, to raise STEP for
+        // `when` at once. The old value is past, so no match comes before the new one is live.
+        if (waited) port.ack_event();
         e.next_armed = 1;
       } else {
         leave = false;
@@ -327,6 +336,7 @@ HMC_STEP_INLINE void run_step_interrupt(StepEngine& engine, Port& port) {
     if (leave) return;
     // Due before the interrupt could return and come back: wait for it here.
     if (after_entry > 0) port.wait_for(entry_mark, static_cast<uint32_t>(after_entry));
+    waited = true;
     now = when;
     due = next_due;
     steps = next_steps;

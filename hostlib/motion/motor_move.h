@@ -24,8 +24,8 @@ namespace hmc::motion::planning {
 constexpr uint32_t kMinDelayUs = 5;
 constexpr uint32_t kMaxDelayUs = 0xFFFFFFFFu / 48u;  // the 48 MHz step timer's 32-bit interval
 constexpr uint32_t kMaxRate = proto::kSettings[proto::kSettingMaxRate - 1].max;  // per motor
-constexpr uint32_t kBudget = 50000;                                              // all moving motors together
-constexpr uint32_t kRampingBudget = 40000;                                       // ... while any of them ramps
+constexpr uint32_t kBudget = proto::kMaxStepRate;                 // all moving motors together
+constexpr uint32_t kRampingBudget = proto::kMaxRampingStepRate;  // ... while any of them ramps
 constexpr uint32_t kMaxAccel = proto::kSettings[proto::kSettingAccel - 1].max;
 constexpr double kMaxRampS = 1073741824.0 / 48e6;  // the firmware's longest ramp: 2^30 ticks
 
