@@ -224,13 +224,12 @@ static_assert(kSettingHomeLocate == kSettingCount, "one SettingId per kSettings 
 // The step budget, summed over the moving motors, from the real image's cycles in hmc-emu's
 // cycle model (docs/performance.md, "Cycles on the real image"; scripts/bench cycles). The rule:
 // the step interrupt uses at most half the 48 MHz CPU at the budget.
-//  - Constant rate: 287-309 cycles a step (one motor; three motors each on its own interrupt;
-//    273 when they share some): 75 000 x 309 = 23.2 M cycles/s, 48 % of the CPU. The spec's
-//    three 20 us moves at once (150 000 steps/s) would need 93 %: refused.
-//  - Ramping: the interrupt's 364-389 cycles a step (31 % at 40 000) plus the main loop's fill(),
-//    which computes each ramp step's time: 464-664 cycles a ramp step (median; 1 680-1 830 with
-//    the planning spikes in the mean; hmc-emu-bench --cycles, flash wait states not counted):
-//    at 40 000 the two take ≈ 1 050 cycles a step, 88 % of the CPU. Not raised.
+//  - Constant rate: 301-322 cycles a step (one motor; three on their own grids); three motors at
+//    40 us (75 000 steps/s) measured 47.6 % of the CPU (50.3 % if every step cost 322, within
+//    the model's error bound). The spec's three 20 us moves at once (150 000) would need 93 %.
+//  - Ramping: the interrupt's 377-394 cycles a step plus the main loop's fill(), which computes
+//    each ramp step's time: 464-664 cycles a ramp step (median, hmc-emu-bench --cycles; flash
+//    wait states not counted): ≈ 1 050 a step, 88 % of the CPU at 40 000. Not raised.
 // VER reports the first as max_rate.
 inline constexpr uint32_t kMaxStepRate = 75000;
 inline constexpr uint32_t kMaxRampingStepRate = 40000;  // when any moving motor ramps

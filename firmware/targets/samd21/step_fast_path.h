@@ -1,18 +1,23 @@
 // The step engine's port on the SAMD21 (step_engine.h): the step interrupt reaches the PORT,
-// the step timer's compare and SysTick directly, with no virtual call.
+// the step timer's compare and flags and SysTick directly, with no virtual call. main.cpp puts
+// the interrupt (irq_tc4, which inlines all of this) in RAM.
 //
+//  - Entry: INTFLAG holding MC0 alone (the compare the last interrupt armed, no overflow) is the
+//    fast entry: STEP rises at once from the masks that interrupt prepared. Anything else (the
+//    main loop's pend, an overflow) goes through StepTimer::take_step_interrupt (flags cleared,
+//    overflow counted, the counter read as "now").
 //  - STEP: every driver's STEP pin is a plain GPIO output (board::kDrivers); the motors due at
 //    one time are raised with one OUTSET write per port group through the single-cycle IOBUS
 //    and lowered with one OUTCLR write. Nothing depends on which timer outputs a pin has, so any
-//    GPIO pin may carry STEP (docs/firmware.md, "Step pins").
+//    GPIO pin may carry STEP (docs/firmware.md, "What the wiring must allow").
 //  - Pulse width: SysTick counts the 48 MHz CPU clock down through 24 bits (ARMv6-M ARM, "The
 //    system timer, SysTick"); a read is one load with no clock-domain synchronisation (the TC
 //    counter needs a read request and a synchronisation wait). The pulse ends once SysTick has
-//    moved kStepHighTicks since the read right after the rising edge's write.
-//  - Time: the step timer (TC4+TC5, 32 bits, step_timer.h) at the same 48 MHz. The interrupt's
-//    "now" is the compare value that fired (StepTimer::take_step_interrupt), what it spent since
-//    comes from SysTick, and the next compare is written only when it is at least kCostTicks
-//    away; closer events are waited for on SysTick inside the interrupt.
+//    moved kStepHighTicks since the read right after the rising edge's write: the difference
+//    of two reads is the cycles between them exactly, so the spin can only lengthen the pulse.
+//  - Time: the step timer (TC4+TC5, 32 bits, step_timer.h) at the same 48 MHz. The compare is
+//    written without waiting for its synchronisation, while the pulse is high, and only for an
+//    event at least kCostTicks away; closer events are waited for on SysTick.
 #pragma once
 
 #include <stdint.h>
