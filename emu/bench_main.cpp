@@ -8,6 +8,10 @@
 // Exit status: the program's (0 when it exits with ADP_Stopped_ApplicationExit, 1 otherwise);
 // 2 bad usage, 3 the ELF cannot be read, 5 the program broke a rule of the emulated chip or
 // ran past --max-instructions.
+//
+// --cycles charges the cycle model's cycles (DDI0484C table 3-1, flash wait states as the
+// program leaves NVMCTRL: none at reset) instead of one per instruction: the program's
+// "instructions" then read as cycles (fill()'s cost per ramp step, docs/performance.md).
 #include <CLI/CLI.hpp>
 #include <cinttypes>
 #include <cstdio>
@@ -24,6 +28,8 @@ int main(int argc, char** argv) {
   CLI::App app{"hmc-emu-bench: runs bench/qemu's program on hmc-emu's CPU with qemu's instruction clock"};
   app.add_option("image", path, "the benchmark ELF (build/qemu/bench.elf)")->required();
   app.add_option("--max-instructions", max_instructions, "stop as an error after this many instructions");
+  bool cycles = false;
+  app.add_flag("--cycles", cycles, "clock by the cycle model: the figures printed are cycles");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -41,7 +47,7 @@ int main(int argc, char** argv) {
   Chip chip(chip_options);
   chip.scs().set_systick_rate(16384, 1000);
   CpuOptions cpu_options;
-  cpu_options.cost = CostModel::kInstructions;
+  cpu_options.cost = cycles ? CostModel::kCycles : CostModel::kInstructions;
   cpu_options.semihosting = true;
   Cpu cpu(chip, image, cpu_options);
   if (!cpu.init(error) || !cpu.reset(0, error)) {

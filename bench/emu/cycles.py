@@ -90,8 +90,8 @@ CASES = [
     ("1 motor, ramping toward 25 us (40 000 steps/s^2)", [(1, 25)], 40000, "1 motor, ramping", 70, 150),
     ("3 motors, constant rate (100, 130, 177 us)", [(1, 100), (2, 130), (3, 177)], 0,
      "3 motors, constant rate", 102, 120),
-    ("3 motors at the budget, constant rate (61 us each: 49 180 steps/s)",
-     [(1, 61), (2, 61), (3, 61)], 0, "3 motors, constant rate, same grid", 102, 120),
+    ("3 motors at the budget, constant rate (40 us each: 75 000 steps/s)",
+     [(1, 40), (2, 40), (3, 40)], 0, "3 motors, constant rate, same grid", 102, 120),
     ("3 motors ramping toward 76 us (13 157 steps/s^2 each)", [(1, 76), (2, 76), (3, 76)], 13157,
      "3 motors, ramping", 102, 160),
 ]

@@ -174,10 +174,12 @@ constexpr uint32_t kBenchCostTicks = 192;  // as Samd21StepPort::kCostTicks
 volatile uint32_t g_port = 0;     // OUTSET / OUTCLR
 volatile uint32_t g_dir = 0;
 volatile uint32_t g_systick = 0;  // SysTick at the interrupt's entry and the pulse's start
-volatile uint32_t g_pulse_clock = 0x1000000u - hmc::fw::kStepHighTicks;  // ... at its end
-volatile uint32_t g_wait_clock = 0x1000000u - kBenchCostTicks;  // SysTick after a wait
+volatile uint32_t g_pulse_clock = 0u - hmc::fw::kStepHighTicks;  // ... at its end
+volatile uint32_t g_wait_clock = 0u - 0x800000u;  // SysTick after a wait: far on
 volatile uint32_t g_compare = 0;  // CC0
 volatile uint32_t g_armed = 0;    // set by arm(), cleared by the bench before each interrupt
+volatile uint32_t g_fired = 0;    // the interrupt is entered by the compare arm() set
+volatile uint32_t g_flags = 0;    // INTFLAG
 
 class FakeTimer final : public hmc::hal::StepTimer {
  public:
@@ -196,29 +198,40 @@ class FakePins final : public hmc::hal::StepPins {
 class BenchPort {
  public:
   static constexpr uint32_t kCostTicks = kBenchCostTicks;
+  explicit BenchPort(uint32_t now) : now_(now) {}
+  bool event_fired(const hmc::fw::StepEngine&) { return g_fired != 0; }  // INTFLAG's load
+  void ack_event() { g_flags = 1; }
+  uint32_t take_entry() {
+    g_flags = 3;
+    return now_;
+  }
   void step_high(uint8_t motors) { g_port = motors; }
-  uint32_t pulse_started() { return g_systick; }
-  void step_low(uint8_t motors, uint32_t since) {
-    while (((since - g_pulse_clock) & 0xFFFFFFu) < hmc::fw::kStepHighTicks) {
+  uint32_t stopwatch() { return g_systick; }
+  uint32_t elapsed(uint32_t mark) { return (mark - g_systick) & 0xFFFFFFu; }
+  void step_low(uint8_t motors, uint32_t mark) {
+    while (((mark - g_pulse_clock) & 0xFFFFFFu) < hmc::fw::kStepHighTicks) {
     }
     g_port = motors;
   }
   void set_dir(uint8_t index, bool reverse) { g_dir = (uint32_t{index} << 1) | reverse; }
-  uint32_t elapsed() { return (0u - g_systick) & 0xFFFFFFu; }
-  void wait_for(uint32_t ticks) {  // the fake SysTick says the wait is over at the first read
-    while (((0u - g_wait_clock) & 0xFFFFFFu) < ticks) {
+  void wait_for(uint32_t mark, uint32_t ticks) {  // the fake SysTick says the wait is over at once
+    while (((mark - g_wait_clock) & 0xFFFFFFu) < ticks) {
     }
   }
   void arm(uint32_t when) {
     g_compare = when;
     g_armed = 1;
   }
+
+ private:
+  uint32_t now_;
 };
 
-// The interrupt as the SAMD21 runs it (run_step_fast_path, less the timer's flag handling).
+// The interrupt as the SAMD21 runs it (run_step_fast_path): entered by the armed compare (the
+// bench sets g_fired) or by the main loop's kick (the counter's value: `now`).
 __attribute__((noinline)) void step_isr(void* engine, uint32_t now) {
-  BenchPort port;
-  hmc::fw::run_step_interrupt(*static_cast<hmc::fw::StepEngine*>(engine), port, now);
+  BenchPort port(now);
+  hmc::fw::run_step_interrupt(*static_cast<hmc::fw::StepEngine*>(engine), port);
 }
 
 #pragma GCC diagnostic push
@@ -322,6 +335,7 @@ Result play(const Scenario& sc) {
       r.ok = false;
       break;
     }
+    g_fired = timer.due == ~Ticks{0} ? 1u : 0u;
     timer.due = ~Ticks{0};
     g_armed = 0;
     if (at > timer.clock) timer.clock = at;

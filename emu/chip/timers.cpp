@@ -47,9 +47,20 @@ uint64_t Tc::position(uint64_t now_ps) const {
   return base_position_ + mul_div(now_ps - base_ps_, hz, Chip::kPsPerSecond);
 }
 
+// The new base is the last whole tick, not now: dropping the fraction of a tick at every
+// rebase (each CCx write: the step interrupt writes one a step) made the counter lose half a
+// tick a write on average, 0.05 % of the step rate at 20 us a step.
 void Tc::rebase() {
-  base_position_ = position(chip_.now_ps());
-  base_ps_ = chip_.now_ps();
+  const uint64_t hz = tick_hz();
+  const uint64_t now_ps = chip_.now_ps();
+  if (hz == 0 || now_ps <= base_ps_) {
+    base_position_ = position(now_ps);
+    base_ps_ = now_ps > base_ps_ ? now_ps : base_ps_;
+    return;
+  }
+  const uint64_t ticks = mul_div(now_ps - base_ps_, hz, Chip::kPsPerSecond);
+  base_position_ += ticks;
+  base_ps_ += mul_div(ticks, Chip::kPsPerSecond, hz);
 }
 
 uint64_t Tc::output_hz() const {

@@ -6,9 +6,10 @@ cannot answer as fast as it arrives ends in clean refusals, never in a spliced l
 another or a hang.
 
   1. During the power-up self-test (three motors ramping): 200 LED lines, each answered ACK.
-  2. Motor 3 running at 20 us a step, the whole step-rate budget (50 000 steps/s): 300 stops of
-     the idle motors 1 and 2, each answered ACK.
-  3. All three motors at 61 us a step (the budget shared; 60 us is over it): 100 LED lines, each answered ACK.
+  2. Motor 3 running at 20 us a step, the spec's fastest (50 000 steps/s): 300 stops of the idle
+     motors 1 and 2, each answered ACK.
+  3. All three motors at 41 us a step (73 171 steps/s: the 75 000 budget shared; 40 us is over
+     it): 100 LED lines, each answered ACK.
   4. 100 VER lines at once: a VER reply (51 bytes) is longer than the line (16 bytes), so the
      board falls behind and its receive ring fills. Every answer must be the VER reply or
      NAK bad_byte (the line that lost bytes, marked where they were lost), never another
@@ -126,7 +127,7 @@ def main(emu_path, image):
     emu.replies(3)
     expect_clean_end("self-test", emu, 2000)
 
-    # 2. One motor at the whole budget.
+    # 2. One motor at the spec's fastest rate.
     emu = Emu(emu_path, image)
     emu.send(STOP_ALL)
     emu.replies(3)
@@ -141,11 +142,11 @@ def main(emu_path, image):
     emu = Emu(emu_path, image)
     emu.send(STOP_ALL)
     emu.replies(3)
-    emu.send(b"".join(stm(m, 1, 8, 5000, 61) for m in (1, 2, 3)) + LED_OFF * 100)
-    expect_acks("three motors at 61 us", emu, 103)
+    emu.send(b"".join(stm(m, 1, 8, 5000, 41) for m in (1, 2, 3)) + LED_OFF * 100)
+    expect_acks("three motors at 41 us", emu, 103)
     emu.send(STOP_ALL)
     emu.replies(3)
-    expect_clean_end("three motors at 61 us", emu, 4000)
+    expect_clean_end("three motors at 41 us", emu, 4000)
 
     # 4. A flood the board cannot answer at the rate it arrives.
     emu = Emu(emu_path, image)

@@ -223,10 +223,17 @@ static_assert(kSettingHomeLocate == kSettingCount, "one SettingId per kSettings 
 // Step rates our firmware can time (controller_motion.cpp applies them; the host names the one a
 // `rate_limit` refusal broke, with these numbers). A move's rate is 1 000 000 / delay_us steps/s,
 // rounded up; it must also stay within the motor's max_rate setting.
-// The step interrupt's budget, summed over the moving motors: set from the two-interrupt
-// scheduler's cost (≈ 750 cycles a step at constant rate, ≈ 1 170 with three motors ramping: near
-// 80 % of the 48 MHz M0+ at these sums; docs/performance.md). VER reports the first as max_rate.
-inline constexpr uint32_t kMaxStepRate = 50000;
+// The step budget, summed over the moving motors, from the real image's cycles in hmc-emu's
+// cycle model (docs/performance.md, "Cycles on the real image"; scripts/bench cycles). The rule:
+// the step interrupt uses at most half the 48 MHz CPU at the budget.
+//  - Constant rate: 301-322 cycles a step (one motor; three on their own grids); three motors at
+//    40 us (75 000 steps/s) measured 47.6 % of the CPU (50.3 % if every step cost 322, within
+//    the model's error bound). The spec's three 20 us moves at once (150 000) would need 93 %.
+//  - Ramping: the interrupt's 377-394 cycles a step plus the main loop's fill(), which computes
+//    each ramp step's time: 464-664 cycles a ramp step (median, hmc-emu-bench --cycles; flash
+//    wait states not counted): ≈ 1 050 a step, 88 % of the CPU at 40 000. Not raised.
+// VER reports the first as max_rate.
+inline constexpr uint32_t kMaxStepRate = 75000;
 inline constexpr uint32_t kMaxRampingStepRate = 40000;  // when any moving motor ramps
 // The step timer's shortest and longest interval at 48 ticks a µs: 240 ticks, 2^32 - 1 ticks.
 inline constexpr uint32_t kShortestDelayUs = 5;

@@ -7,38 +7,56 @@
 // kMaxSegmentTicks after the previous one; the main loop splits longer waits into events
 // without a step).
 //
-// One event, one interrupt. An event is a STEP pulse (or a DIR change, or nothing: a wait).
-// The interrupt raises STEP on every motor due at this time with one port write, computes each
-// one's next event while the pulse is high, waits until the pulse has been high
-// kStepHighTicks (DRV8711 datasheet, SLVSC40, "Timing Requirements": STEP high ≥ 1.9 µs, low
-// ≥ 1.9 µs, DIR setup and hold 200 ns around a STEP edge), lowers STEP, and arms the compare for
-// the earliest event left. "Now" is the compare value that fired (the port's entry time); what
-// the interrupt has spent since comes from a free-running cycle counter (SysTick on the SAMD21:
-// one load, no clock-domain synchronisation), and an event closer than the interrupt's own cost
-// (Port::kCostTicks) is waited for in the interrupt instead of leaving and coming back.
+// One event, one interrupt, and nothing before the pulse but the entry. Each interrupt ends by
+// working out the next event: its time (`next_when`, the compare it arms), the motors due then
+// (`next_due`) and which of them step (`next_steps`). The next entry, when the armed compare
+// alone brought it there and the main loop asked for nothing, raises STEP on `next_steps` with
+// one port write as its first action; only then, while the pulse is high, does it do the
+// bookkeeping: DIR for a due DIR event, each due motor's next event (only the due ones are
+// visited), the earliest event left and its masks, the compare. It then waits until the pulse
+// has been high kStepHighTicks (DRV8711 datasheet, SLVSC40, "Timing Requirements": STEP high
+// ≥ 1.9 µs, low ≥ 1.9 µs, DIR setup and hold 200 ns around a STEP edge), lowers STEP and
+// returns. Any other entry (the main loop's kick: a halt, a refilled ring, an overdue event;
+// the timer's overflow) takes the clock as "now", takes the main loop's requests first, and
+// steps the motors due by then. An event closer than the interrupt's own cost
+// (Port::kCostTicks) is waited for inside the interrupt instead of leaving and coming back.
 //
 // Port (a template parameter, so the board's registers are reached directly): the SAMD21's
 // Samd21StepPort (targets/samd21/step_fast_path.h) or HalStepPort (step_scheduler_isr.cpp, over
 // the HAL interfaces, for the simulator and the tests). It provides:
 //   static constexpr uint32_t kCostTicks;
-//   void step_high(uint8_t motors);               // bit m−1 for motor m
-//   uint32_t pulse_started();                     // the counter right after step_high
-//   void step_low(uint8_t motors, uint32_t since); // after the pin has been high kStepHighTicks
-//   void set_dir(uint8_t index, bool reverse);    // index 0..2
-//   uint32_t elapsed();                           // ticks since the interrupt's entry
-//   void wait_for(uint32_t ticks);                // until `ticks` after the entry
-//   void arm(uint32_t when);                      // the interrupt at `when` (≥ kCostTicks away)
+//   bool event_fired(const StepEngine&);         // entered by the armed compare alone
+//   void ack_event();                            // then: clears the compare's flag
+//   uint32_t take_entry();                       // otherwise: clears what entered; the clock
+//   void step_high(uint8_t motors);              // bit m−1 for motor m
+//   uint32_t stopwatch();                        // a mark on a free-running tick count
+//   void step_low(uint8_t motors, uint32_t mark);  // once kStepHighTicks have passed since mark
+//   void set_dir(uint8_t index, bool reverse);   // index 0..2
+//   uint32_t elapsed(uint32_t mark);             // ticks since mark
+//   void wait_for(uint32_t mark, uint32_t ticks);  // until `ticks` after mark
+//   void arm(uint32_t when);                     // the interrupt at `when` (≥ kCostTicks away)
 //
 // Ring protocol (one core, no locks): the main loop writes a segment, then advances `tail`; the
 // interrupt reads a segment, then advances `head`. A motor whose ring ran dry while moving waits
 // (not armed) and counts a starved event; the main loop's next push re-arms it through
 // `pending`. A halt empties the ring in the interrupt; segments the main loop pushes afterwards
 // that do not start a move are dropped.
+//
+// Code placement: on the board (ARMv6-M) the per-event code goes to .ramfunc, which the linker
+// script puts in RAM (no flash wait states; samd21_sections.ld); HMC_STEP_INLINE forces the
+// per-event helpers into the interrupt.
 #pragma once
 
 #include <stdint.h>
 
 #include "ramp.h"
+
+#if defined(__ARM_ARCH_6M__)
+#define HMC_STEP_RAMFUNC __attribute__((section(".ramfunc.step_engine"), noinline, noclone))
+#else
+#define HMC_STEP_RAMFUNC
+#endif
+#define HMC_STEP_INLINE __attribute__((always_inline)) inline
 
 namespace hmc::fw {
 
@@ -65,22 +83,23 @@ struct StepSegment {
   uint8_t end;            // kSegEnd: a MoveEnd (kNone: a move follows, the motion goes on)
 };
 
-// One motor's share of the interrupt. Fields the interrupt uses per event come first.
+// One motor's share of the interrupt (its next event's time and whether it has one are in
+// StepEngine, where the interrupt looks for the earliest). Byte fields first, then words, the
+// ring last: on the M0+ a byte load reaches 31 bytes past its base register, a word load 124,
+// so every field the interrupt uses is one load from the lane's address.
 struct StepLane {
-  uint32_t next;       // the next event's time; the last event's while not armed
-  uint32_t interval;   // of the playing segment
-  uint32_t left;       // events of the playing segment from `next` on
-  int32_t position;    // 1/256 step
-  uint32_t fired;      // steps of the current move
-  int16_t position_step;
   uint8_t flags;       // of the playing segment
-  uint8_t armed;       // `next` is a pending event
   uint8_t moving;      // a move is playing (from its start segment to its end segment)
   uint8_t end;         // the last motion's MoveEnd
   uint8_t halt_request;  // written by the main loop: 0x80 | the MoveEnd to halt with, 0 none
   uint8_t halt_upto;     // the main loop's tail when it asked: the halt drops segments before it
   uint8_t head;          // written by the interrupt
   uint8_t tail;          // written by the main loop
+  int16_t position_step;
+  uint32_t interval;   // of the playing segment
+  uint32_t left;       // events of the playing segment from `next` on
+  int32_t position;    // 1/256 step
+  uint32_t fired;      // steps of the current move
   uint32_t total;        // steps since power-up (wraps)
   uint32_t last_step;    // time of the last step
   uint32_t last_interval;  // between the last two steps, 0 at rest
@@ -89,9 +108,20 @@ struct StepLane {
   StepSegment ring[kRingSize];
 };
 
+// Byte fields first (a byte load reaches 31 bytes past its base on the M0+), then words.
 struct StepEngine {
-  uint8_t pending;   // set by the main loop: a halt or a push for a waiting motor
-  uint32_t starved;  // events that found their ring empty (0 when the main loop keeps up)
+  uint8_t pending;     // set by the main loop: a halt or a push for a waiting motor
+  // The next event, as the last interrupt left it (read first by the next one).
+  uint8_t next_steps;  // the motors whose STEP rises then
+  uint8_t next_due;    // the motors due then (stepping, DIR or waiting)
+  uint8_t next_armed;  // the compare is armed for next_when
+  // Per motor (bit i for lane i): `next[i]` is a pending event; its segment steps (not a DIR
+  // change, not a wait).
+  uint8_t armed;
+  uint8_t stepping;
+  uint32_t next_when;  // the next event's time: the compare armed, when next_armed
+  uint32_t next[3];    // each lane's next event; its last event's while not armed
+  uint32_t starved;    // events that found their ring empty (0 when the main loop keeps up)
   StepLane lanes[3];
 };
 
@@ -100,14 +130,24 @@ namespace step_engine_detail {
 inline uint8_t load8(const uint8_t& x) { return *static_cast<const volatile uint8_t*>(&x); }
 inline void store8(uint8_t& x, uint8_t v) { *static_cast<volatile uint8_t*>(&x) = v; }
 inline void fence() { __atomic_signal_fence(__ATOMIC_SEQ_CST); }
+// The address as a value computed at run time: the compiler then reaches the fields by small
+// offsets from it instead of from a base of its choosing (a byte load reaches 31 bytes).
+template <class T>
+HMC_STEP_INLINE T* based(T* p) {
+  __asm__("" : "+r"(p));
+  return p;
+}
 
-// Takes the lane's next segment, `next` holding the last event's time. Drops what is left of a
+// Takes lane i's next segment, next[i] holding the last event's time. Drops what is left of a
 // halted move; passes end markers. Leaves the lane armed on its next event, or not armed.
-inline void load_segment(StepEngine& e, StepLane& lane) {
+// Per event while ramping (a ramp step is a segment of one): in RAM on the board.
+HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
+  StepLane& lane = e.lanes[i];
+  const uint8_t bit = uint8_t(1u << i);
   for (;;) {
     const uint8_t head = lane.head;
     if (head == load8(lane.tail)) {
-      lane.armed = 0;
+      e.armed = uint8_t(e.armed & ~bit);
       if (lane.moving != 0) ++e.starved;
       return;
     }
@@ -118,7 +158,7 @@ inline void load_segment(StepEngine& e, StepLane& lane) {
       lane.moving = 1;
       lane.fired = 0;
       lane.position_step = seg.position_step;
-      lane.next = seg.interval;
+      e.next[i] = seg.interval;
       lane.last_step = seg.interval;
     } else if ((flags & kSegEnd) != 0) {
       if (lane.moving != 0 && seg.end != 0) {
@@ -135,7 +175,7 @@ inline void load_segment(StepEngine& e, StepLane& lane) {
       store8(lane.head, static_cast<uint8_t>(head + 1));
       continue;
     } else {
-      lane.next += seg.interval;
+      e.next[i] += seg.interval;
       if ((flags & kSegMove) != 0) {
         lane.fired = 0;
         lane.position_step = seg.position_step;
@@ -144,7 +184,12 @@ inline void load_segment(StepEngine& e, StepLane& lane) {
     lane.interval = seg.interval;
     lane.left = seg.count;
     lane.flags = flags;
-    lane.armed = 1;
+    e.armed = uint8_t(e.armed | bit);
+    if ((flags & (kSegDir | kSegNoStep)) == 0) {
+      e.stepping = uint8_t(e.stepping | bit);
+    } else {
+      e.stepping = uint8_t(e.stepping & ~bit);
+    }
     fence();
     store8(lane.head, static_cast<uint8_t>(head + 1));
     return;
@@ -155,6 +200,7 @@ inline void load_segment(StepEngine& e, StepLane& lane) {
 inline void take_requests(StepEngine& e) {
   for (uint8_t i = 0; i < 3; ++i) {
     StepLane& lane = e.lanes[i];
+    const uint8_t bit = uint8_t(1u << i);
     const uint8_t halt = load8(lane.halt_request);
     if (halt != 0) {
       store8(lane.halt_request, 0);
@@ -166,92 +212,136 @@ inline void take_requests(StepEngine& e) {
         ++lane.finished;
       }
       lane.moving = 0;
-      lane.armed = 0;
+      e.armed = uint8_t(e.armed & ~bit);
       lane.last_interval = 0;
       ++lane.halts;
     }
-    if (lane.armed == 0) load_segment(e, lane);
+    if ((e.armed & bit) == 0) load_segment(e, i);
   }
 }
 
-// The lane's due event is done (STEP raised if it steps): account for it, take the next.
-inline void advance(StepEngine& e, StepLane& lane) {
-  if ((lane.flags & (kSegNoStep | kSegDir)) == 0) {
+// Lane i's due event is done (STEP raised if it steps): account for it, take the next.
+HMC_STEP_INLINE void advance(StepEngine& e, uint8_t i, uint8_t bit) {
+  StepLane& lane = *based(&e.lanes[i]);
+  const uint32_t at = e.next[i];
+  if ((e.stepping & bit) != 0) {
     lane.position += lane.position_step;
     ++lane.fired;
     ++lane.total;
-    lane.last_interval = lane.next - lane.last_step;
-    lane.last_step = lane.next;
+    lane.last_interval = at - lane.last_step;
+    lane.last_step = at;
   }
   if (lane.left != kEndlessEvents && --lane.left == 0) {
-    load_segment(e, lane);
+    load_segment(e, i);
   } else {
-    lane.next += lane.interval;
+    e.next[i] = at + lane.interval;
   }
 }
 
 }  // namespace step_engine_detail
 
-// The step timer's interrupt. `now`: the compare value that fired, or the counter when the
-// main loop had the interrupt run at once.
+// The step timer's interrupt (see the top of this file).
 template <class Port>
-void run_step_interrupt(StepEngine& e, Port& port, uint32_t now) {
+HMC_STEP_INLINE void run_step_interrupt(StepEngine& engine, Port& port) {
   using namespace step_engine_detail;
-  const uint32_t entry = now;
-  if (load8(e.pending) != 0) {
-    store8(e.pending, 0);
-    take_requests(e);
-  }
-  for (;;) {
-    // The motors due now: which step, which only change DIR or wait.
-    uint8_t due = 0;
-    uint8_t steps = 0;
-#pragma GCC unroll 3  // constant offsets instead of a multiply per motor
-    for (uint8_t i = 0; i < 3; ++i) {
-      const StepLane& lane = e.lanes[i];
-      if (lane.armed == 0 || static_cast<int32_t>(lane.next - now) > 0) continue;
-      due |= uint8_t(1u << i);
-      if ((lane.flags & (kSegDir | kSegNoStep)) == 0) {
-        steps |= uint8_t(1u << i);
-      } else if ((lane.flags & kSegDir) != 0) {
-        port.set_dir(i, (lane.flags & kSegReverse) != 0);
-      }
+  StepEngine& e = *based(&engine);
+  uint8_t due;
+  uint8_t steps;
+  uint32_t now;
+  const bool fired = port.event_fired(e) && load8(e.pending) == 0;
+  if (fired) {
+    steps = e.next_steps;
+    if (steps != 0) port.step_high(steps);
+    port.ack_event();
+    due = e.next_due;
+    now = e.next_when;
+  } else {
+    if (load8(e.pending) != 0) {
+      store8(e.pending, 0);
+      take_requests(e);
     }
-    uint32_t since = 0;
-    if (steps != 0) {
-      port.step_high(steps);
-      since = port.pulse_started();
-    }
-    // While the pulse is high: each due motor's next event, and the earliest event left.
-    int32_t best = 0x7FFFFFFF;
-    uint32_t when = 0;
+    // The clock after the requests: the waits and the compare count from here (read before
+    // them, the time they took went uncounted and a compare could be written for a time
+    // already past, to be found only by the main loop's overdue check 1 ms later).
+    now = port.take_entry();
+    due = 0;
 #pragma GCC unroll 3
     for (uint8_t i = 0; i < 3; ++i) {
-      StepLane& lane = e.lanes[i];
-      if ((due & (1u << i)) != 0) advance(e, lane);
-      if (lane.armed == 0) continue;
-      const int32_t d = static_cast<int32_t>(lane.next - now);
-      if (d < best) {
-        best = d;
-        when = lane.next;
+      if ((e.armed & (1u << i)) != 0 && static_cast<int32_t>(e.next[i] - now) <= 0) {
+        due |= uint8_t(1u << i);
       }
     }
-    if (steps != 0) port.step_low(steps, since);
-    if (best == 0x7FFFFFFF) return;  // nothing armed
-    // Time has passed since entry (the pulses above, at least): compare what is left. Both
-    // the port's clock and its waits count from the entry, not from `now`, which moves on
-    // with each pass: measured from `now`, a second pass found every event already due and
-    // stepped the ring empty as fast as the CPU ran.
+    steps = due & e.stepping;
+    if (steps != 0) port.step_high(steps);
+  }
+  e.next_armed = 0;
+  // The entry's mark: waits and the time spent count from here (the event's time plus the
+  // entry's latency), so an event waited for inside comes as late after its time as one that
+  // enters the interrupt.
+  const uint32_t entry_mark = port.stopwatch();
+  uint32_t mark = entry_mark;
+  const uint32_t entry = now;
+  bool waited = !fired;  // a slow entry may wait for the event its compare is armed for
+  for (;;) {
+    // While the pulse is high: the due motors' DIR and next events.
+#pragma GCC unroll 3
+    for (uint8_t i = 0; i < 3; ++i) {
+      const uint8_t bit = uint8_t(1u << i);
+      if ((due & bit) == 0) continue;
+      const uint8_t flags = e.lanes[i].flags;
+      if ((flags & kSegDir) != 0) port.set_dir(i, (flags & kSegReverse) != 0);
+      advance(e, i, bit);
+    }
+    // The earliest event left and the motors due then.
+    int32_t best = 0x7FFFFFFF;
+    uint8_t next_due = 0;
+    const uint8_t armed = e.armed;
+#pragma GCC unroll 3
+    for (uint8_t i = 0; i < 3; ++i) {
+      const uint8_t bit = uint8_t(1u << i);
+      if ((armed & bit) == 0) continue;
+      const int32_t d = static_cast<int32_t>(e.next[i] - now);
+      if (d < best) {
+        best = d;
+        next_due = bit;
+      } else if (d == best) {
+        next_due |= bit;
+      }
+    }
+    const uint8_t next_steps = next_due & e.stepping;
+    const uint32_t when = now + static_cast<uint32_t>(best);
+    e.next_when = when;
+    e.next_due = next_due;
+    e.next_steps = next_steps;
+    // Time has passed since entry (the pulse so far, at least): compare what is left. The
+    // port's clock and waits count from the entry, not from `now`, which moves on with each
+    // pass: measured from `now`, a second pass found every event already due and stepped the
+    // ring empty as fast as the CPU ran.
     const int32_t after_entry = static_cast<int32_t>(when - entry);
-    if (after_entry - static_cast<int32_t>(port.elapsed()) >= static_cast<int32_t>(Port::kCostTicks)) {
-      port.arm(when);
-      return;
+    bool leave = true;
+    if (next_due != 0) {
+      if (after_entry - static_cast<int32_t>(port.elapsed(entry_mark)) >=
+          static_cast<int32_t>(Port::kCostTicks)) {
+        port.arm(when);  // its synchronisation overlaps the rest of the pulse
+        // After a wait inside, the old compare (an event this interrupt has made) may have
+        // matched meanwhile: its flag would bring the next entry in early, to raise STEP for
+        // `when` at once. The old value is past, so no match comes before the new one is live.
+        if (waited) port.ack_event();
+        e.next_armed = 1;
+      } else {
+        leave = false;
+      }
     }
+    if (steps != 0) port.step_low(steps, mark);
+    if (leave) return;
     // Due before the interrupt could return and come back: wait for it here.
-    if (best > 0) {
-      if (after_entry > 0) port.wait_for(static_cast<uint32_t>(after_entry));
-      now = when;
-    }
+    if (after_entry > 0) port.wait_for(entry_mark, static_cast<uint32_t>(after_entry));
+    waited = true;
+    now = when;
+    due = next_due;
+    steps = next_steps;
+    if (steps != 0) port.step_high(steps);
+    mark = port.stopwatch();
   }
 }
 

@@ -1,10 +1,13 @@
 // The step interrupt (step_engine.h) against a port whose clock moves as the interrupt spends
 // time, as the SAMD21's does: events closer than the interrupt's own cost are waited for inside
-// it, and no step may come before its time however many passes one entry makes.
+// it, and no step may come before its time however many passes one entry makes; an entry by
+// the compare raises STEP before any other port call, and an entry that waited inside clears
+// the old compare's flag with the new compare (else the next entry would come in early).
 #include "step_engine.h"
 
 #include <catch2/catch.hpp>
 
+#include <string>
 #include <vector>
 
 namespace {
@@ -17,22 +20,36 @@ struct ClockPort {
   static constexpr uint32_t kCostTicks = 192;
   static constexpr uint32_t kCallTicks = 40;
   uint32_t clock = 0;
-  uint32_t entry = 0;
   uint32_t armed = 0;
+  bool fired = false;           // entered by the compare arm() set
   std::vector<uint32_t> rises;  // the clock at each STEP rise
+  std::string calls;            // one letter a port call: H high, A ack, E entry, W wait, M arm
 
+  bool event_fired(const StepEngine&) const { return fired; }
+  void ack_event() { calls += 'A'; }
+  uint32_t take_entry() {
+    calls += 'E';
+    return clock;
+  }
   void step_high(uint8_t) {
+    calls += 'H';
     clock += kCallTicks;
     rises.push_back(clock);
   }
-  uint32_t pulse_started() { return clock; }
-  void step_low(uint8_t, uint32_t since) { clock = since + hmc::fw::kStepHighTicks; }
-  void set_dir(uint8_t, bool) { clock += kCallTicks; }
-  uint32_t elapsed() { return clock - entry; }
-  void wait_for(uint32_t ticks) {
-    if (clock - entry < ticks) clock = entry + ticks;
+  uint32_t stopwatch() { return clock; }
+  uint32_t elapsed(uint32_t mark) { return clock - mark; }
+  void step_low(uint8_t, uint32_t mark) {
+    if (clock - mark < hmc::fw::kStepHighTicks) clock = mark + hmc::fw::kStepHighTicks;
   }
-  void arm(uint32_t when) { armed = when; }
+  void set_dir(uint8_t, bool) { clock += kCallTicks; }
+  void wait_for(uint32_t mark, uint32_t ticks) {
+    calls += 'W';
+    if (clock - mark < ticks) clock = mark + ticks;
+  }
+  void arm(uint32_t when) {
+    calls += 'M';
+    armed = when;
+  }
 };
 
 }  // namespace
@@ -53,9 +70,10 @@ TEST_CASE("step interrupt: events waited for inside one entry come at their time
   ClockPort port;
   uint32_t now = 10000;
   for (int entries = 0; entries < 10 && port.rises.size() < due.size(); ++entries) {
-    port.clock = port.entry = now;
+    port.clock = now;
+    port.fired = entries > 0;  // the first entry is the main loop's kick (e.pending)
     port.armed = 0;
-    hmc::fw::run_step_interrupt(e, port, now);
+    hmc::fw::run_step_interrupt(e, port);
     if (port.armed == 0) break;
     now = port.armed;
   }
@@ -66,4 +84,45 @@ TEST_CASE("step interrupt: events waited for inside one entry come at their time
     CHECK(port.rises[i] <= due[i] + 2 * ClockPort::kCallTicks);
   }
   CHECK(lane.total == due.size());
+}
+
+TEST_CASE("step interrupt: an entry by its compare raises STEP before anything else") {
+  // Motor 1: steps at 10 000 and every 960 ticks after (each entry by the compare), then two
+  // 150 ticks apart (waited for inside: the old compare's flag is cleared with the new compare).
+  StepEngine e{};
+  hmc::fw::StepLane& lane = e.lanes[0];
+  lane.ring[0] = StepSegment{10000, 1, 16, hmc::fw::kSegStart, 0};
+  lane.ring[1] = StepSegment{960, 3, 0, 0, 0};
+  lane.ring[2] = StepSegment{150, 2, 0, 0, 0};
+  lane.ring[3] = StepSegment{960, 2, 0, 0, 0};
+  lane.tail = 4;
+  e.pending = 1;
+
+  ClockPort port;
+  uint32_t now = 10000;
+  std::vector<std::string> entries;
+  for (int n = 0; n < 10; ++n) {
+    port.clock = now;
+    port.fired = n > 0;
+    port.armed = 0;
+    port.calls.clear();
+    hmc::fw::run_step_interrupt(e, port);
+    entries.push_back(port.calls);
+    if (port.armed == 0) break;
+    now = port.armed;
+  }
+  REQUIRE(entries.size() >= 5);
+  CHECK(entries[0].rfind("EH", 0) == 0);  // the kick: the clock first, then STEP
+  for (size_t n = 1; n < entries.size(); ++n) {
+    INFO("entry " << n << ": " << entries[n]);
+    if (n + 1 < entries.size()) CHECK(entries[n].rfind("HA", 0) == 0);  // STEP, then the flag
+  }
+  // The entry that waited inside (for the steps 150 ticks apart) clears the flag after arming.
+  bool waited_and_cleared = false;
+  for (const std::string& calls : entries) {
+    const size_t wait = calls.find('W');
+    if (wait != std::string::npos) waited_and_cleared = calls.find("MA", wait) != std::string::npos;
+  }
+  CHECK(waited_and_cleared);
+  CHECK(lane.total == 8);
 }

@@ -201,7 +201,7 @@ void StepScheduler::fill() {
     sync(index);
     produce(index);
     const StepLane& lane = engine_.lanes[index];
-    if (load8(lane.armed) == 0) {
+    if ((load8(engine_.armed) & (1u << index)) == 0) {
       if (load8(lane.head) != lane.tail) wake(index);
       continue;
     }
@@ -209,7 +209,7 @@ void StepScheduler::fill() {
       now = static_cast<uint32_t>(timer_.now());
       have_now = true;
     }
-    if (static_cast<int32_t>(now - load(lane.next)) > static_cast<int32_t>(kOverdueTicks)) kick();
+    if (static_cast<int32_t>(now - load(engine_.next[index])) > static_cast<int32_t>(kOverdueTicks)) kick();
   }
 }
 
@@ -284,7 +284,7 @@ void StepScheduler::produce(uint8_t index) {
     mo.rise_ok_at = mo.last_rise + kStepHighTicks + kStepLowTicks;
     pushed = true;
   }
-  if (pushed && load8(engine_.lanes[index].armed) == 0) wake(index);
+  if (pushed && (load8(engine_.armed) & (1u << index)) == 0) wake(index);
 }
 
 // The first event of a move from rest: DIR when it changes, or a wait, at the anchor.

@@ -16,14 +16,22 @@ class HalStepPort {
   HalStepPort(hal::StepTimer& timer, hal::StepPins& pins, hal::Ticks now)
       : timer_(timer), pins_(pins), now_(now) {}
 
+  // The compare the interrupt armed has come (the timer calls at the time asked or later).
+  bool event_fired(const StepEngine& e) const {
+    return e.next_armed != 0 && static_cast<int32_t>(static_cast<uint32_t>(now_) - e.next_when) >= 0;
+  }
+  void ack_event() {}
+  uint32_t take_entry() { return static_cast<uint32_t>(now_); }
+
   void step_high(uint8_t motors) {
     for (uint8_t i = 0; i < 3; ++i) {
       if ((motors & (1u << i)) != 0) pins_.set_step(static_cast<uint8_t>(i + 1), true);
     }
   }
-  uint32_t pulse_started() { return static_cast<uint32_t>(timer_.now()); }
-  void step_low(uint8_t motors, uint32_t since) {
-    timer_.wait_until(widen(since + kStepHighTicks));
+  uint32_t stopwatch() { return static_cast<uint32_t>(timer_.now()); }
+  uint32_t elapsed(uint32_t mark) { return static_cast<uint32_t>(timer_.now()) - mark; }
+  void step_low(uint8_t motors, uint32_t mark) {
+    timer_.wait_until(widen(mark + kStepHighTicks));
     for (uint8_t i = 0; i < 3; ++i) {
       if ((motors & (1u << i)) != 0) pins_.set_step(static_cast<uint8_t>(i + 1), false);
     }
@@ -31,8 +39,7 @@ class HalStepPort {
   void set_dir(uint8_t index, bool reverse) {
     pins_.set_dir(static_cast<uint8_t>(index + 1), reverse);
   }
-  uint32_t elapsed() { return 0; }
-  void wait_for(uint32_t ticks) { timer_.wait_until(now_ + ticks); }
+  void wait_for(uint32_t mark, uint32_t ticks) { timer_.wait_until(widen(mark + ticks)); }
   void arm(uint32_t when) { timer_.schedule(widen(when)); }
 
  private:
@@ -50,9 +57,8 @@ class HalStepPort {
 }  // namespace
 
 void StepScheduler::on_step_timer() {
-  const hal::Ticks now = timer_.now();
-  HalStepPort port(timer_, pins_, now);
-  run_step_interrupt(engine_, port, static_cast<uint32_t>(now));
+  HalStepPort port(timer_, pins_, timer_.now());
+  run_step_interrupt(engine_, port);
 }
 
 }  // namespace hmc::fw

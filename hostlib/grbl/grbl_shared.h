@@ -5,14 +5,15 @@
 #include <string>
 
 #include "hmc/grbl.h"
+#include "hmc/protocol_facts.h"
 
 namespace hmc::grbl::detail {
 
 inline constexpr double kMmPerInch = 25.4;
 // Rates: every motor's under the board's budget for motors stepping at once while one ramps
-// (docs/motion-files.md: 40 000 steps/s; 50 000 at constant rate).
-inline constexpr double kRampBudget = 40000;
-inline constexpr double kFlatBudget = 50000;
+// (protocol_facts.h: 40 000 steps/s; 75 000 at constant rate).
+inline constexpr double kRampBudget = proto::kMaxRampingStepRate;
+inline constexpr double kFlatBudget = proto::kMaxStepRate;
 // Without a profile speed or acceleration: one turn of a 200-step motor at 1/16 per second, and
 // that rate reached in a quarter of a second.
 inline constexpr double kDefaultRate = 3200;   // steps/s

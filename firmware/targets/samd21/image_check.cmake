@@ -3,7 +3,8 @@
 # "Reset cause and fault record") and the board variant's info text in the shipped bytes:
 #   - the reset vector is reset_handler, whose first instruction is `cpsid i` (0xB672);
 #   - HardFault, NMI and every peripheral vector without a handler of its own go to
-#     unexpected_interrupt (the fault recorder); every vector entry points into the image;
+#     unexpected_interrupt (the fault recorder); every vector entry points into the image or
+#     into its code copied to RAM (.ramfunc: the step interrupt);
 #   - the fault record lies in .noinit: after .bss (not zeroed at start-up), below the stack;
 #   - the image carries "hmc-board:<HMC_BOARD>;" in its .hmc_board_info section.
 # Inputs: NM (arm-none-eabi-nm), ELF, BIN, BASE (the link address, e.g. 0x2000), BOARD.
@@ -48,6 +49,8 @@ math(EXPR base "${BASE}")
 math(EXPR end "${base} + ${size}")
 symbol(reset_handler reset)
 symbol(unexpected_interrupt recorder)
+symbol(__ramfunc_start__ ramfunc_start)  # code copied to RAM at start-up (samd21_sections.ld)
+symbol(__ramfunc_end__ ramfunc_end)
 
 # The vector table: 16 system entries and 28 peripheral ones.
 word(4 reset_vector)
@@ -71,8 +74,14 @@ foreach(entry RANGE 1 43)
   endif()
   math(EXPR target "${vector} & ~1")
   math(EXPR thumb "${vector} & 1")
-  if(target LESS base OR NOT target LESS end OR NOT thumb EQUAL 1)
-    fail("vector ${entry} points outside the image or to ARM code")
+  set(in_image FALSE)
+  if(NOT target LESS base AND target LESS end)
+    set(in_image TRUE)
+  elseif(NOT target LESS ramfunc_start AND target LESS ramfunc_end)
+    set(in_image TRUE)
+  endif()
+  if(NOT in_image OR NOT thumb EQUAL 1)
+    fail("vector ${entry} points outside the image (or its code in RAM) or to ARM code")
   endif()
 endforeach()
 

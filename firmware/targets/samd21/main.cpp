@@ -1,7 +1,7 @@
 // The SAMD21 firmware's entry: wires the board's HAL objects (this directory) into fw::Board,
 // runs the Controller, and routes the three interrupts the firmware uses.
 //
-//   irq_tc4      step timer, priority 0   → the step engine's fast path (step_fast_path.h)
+//   irq_tc4      step timer, priority 0   → the step engine's fast path (step_fast_path.h), in RAM
 //   irq_sercom5  command UART, priority 1 → receive ring / transmit ring
 //   irq_eic      switches, priority 2     → Controller::on_switch_change()
 //
@@ -54,7 +54,10 @@ volatile samd21::ClockSource clock_source;
 
 }  // namespace
 
-extern "C" void irq_tc4() { samd21::run_step_fast_path(step_timer, controller.step_engine()); }
+// In RAM (.ramfunc, samd21_sections.ld): no flash wait states on the step path.
+extern "C" __attribute__((section(".ramfunc.irq_tc4"))) void irq_tc4() {
+  samd21::run_step_fast_path(step_timer, controller.step_engine());
+}
 
 extern "C" void irq_sercom5() { serial_port.on_interrupt(); }
 

@@ -1,18 +1,23 @@
 // The step engine's port on the SAMD21 (step_engine.h): the step interrupt reaches the PORT,
-// the step timer's compare and SysTick directly, with no virtual call.
+// the step timer's compare and flags and SysTick directly, with no virtual call. main.cpp puts
+// the interrupt (irq_tc4, which inlines all of this) in RAM.
 //
+//  - Entry: INTFLAG holding MC0 alone (the compare the last interrupt armed, no overflow) is the
+//    fast entry: STEP rises at once from the masks that interrupt prepared. Anything else (the
+//    main loop's pend, an overflow) goes through StepTimer::take_step_interrupt (flags cleared,
+//    overflow counted, the counter read as "now").
 //  - STEP: every driver's STEP pin is a plain GPIO output (board::kDrivers); the motors due at
 //    one time are raised with one OUTSET write per port group through the single-cycle IOBUS
 //    and lowered with one OUTCLR write. Nothing depends on which timer outputs a pin has, so any
-//    GPIO pin may carry STEP (docs/firmware.md, "Step pins").
+//    GPIO pin may carry STEP (docs/firmware.md, "What the wiring must allow").
 //  - Pulse width: SysTick counts the 48 MHz CPU clock down through 24 bits (ARMv6-M ARM, "The
 //    system timer, SysTick"); a read is one load with no clock-domain synchronisation (the TC
 //    counter needs a read request and a synchronisation wait). The pulse ends once SysTick has
-//    moved kStepHighTicks since the read right after the rising edge's write.
-//  - Time: the step timer (TC4+TC5, 32 bits, step_timer.h) at the same 48 MHz. The interrupt's
-//    "now" is the compare value that fired (StepTimer::take_step_interrupt), what it spent since
-//    comes from SysTick, and the next compare is written only when it is at least kCostTicks
-//    away; closer events are waited for on SysTick inside the interrupt.
+//    moved kStepHighTicks since the read right after the rising edge's write: the difference
+//    of two reads is the cycles between them exactly, so the spin can only lengthen the pulse.
+//  - Time: the step timer (TC4+TC5, 32 bits, step_timer.h) at the same 48 MHz. The compare is
+//    written without waiting for its synchronisation, while the pulse is high, and only for an
+//    event at least kCostTicks away; closer events are waited for on SysTick.
 #pragma once
 
 #include <stdint.h>
@@ -23,6 +28,7 @@
 #include "reg_access.h"
 #include "regs_port.h"
 #include "regs_system.h"
+#include "regs_timer.h"
 #include "step_timer.h"
 
 namespace hmc::samd21 {
@@ -53,44 +59,54 @@ inline constexpr uint32_t kIobusB = port::kIobusBase + port::kGroupStride;
 
 class Samd21StepPort {
  public:
-  // The interrupt's exit, the next entry and the work before the compare is live (an estimate
-  // to be replaced by the emulator's measured cycles); a closer event is waited for.
+  // From a compare value written to the interrupt at that time on a fast-path entry: the
+  // rest of the pass, the compare's synchronisation (5 GCLK periods, datasheet "TC",
+  // "Synchronization"), the exit and the next entry, with a margin: an event closer than this
+  // is waited for inside the interrupt.
   static constexpr uint32_t kCostTicks = 192;
 
-  Samd21StepPort(StepTimer& timer, uint32_t entry) : timer_(timer), entry_(entry) {}
+  explicit Samd21StepPort(StepTimer& timer) : timer_(timer) {}
+
+  // The armed compare, no overflow to count (INTFLAG's other flags are not interrupts here).
+  bool event_fired(const fw::StepEngine&) {
+    return (r8(kTc + tc::kIntFlag) & (tc::kIntOvf | tc::kIntMc0)) == tc::kIntMc0;
+  }
+  void ack_event() { r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntMc0); }
+  uint32_t take_entry() { return timer_.take_step_interrupt(); }
 
   void step_high(uint8_t motors) {
     using namespace step_fast_path_detail;
     r32(kIobusA + port::kOutSet) = kGroupA.of[motors];
     if (kAnyOnB) r32(kIobusB + port::kOutSet) = kGroupB.of[motors];
   }
-  uint32_t pulse_started() { return r32(systick::kCvr); }
-  void step_low(uint8_t motors, uint32_t since) {
+  // SysTick counts down through 24 bits: marks are its raw values, differences masked.
+  uint32_t stopwatch() { return r32(systick::kCvr); }
+  uint32_t elapsed(uint32_t mark) { return (mark - r32(systick::kCvr)) & 0xFFFFFFu; }
+  void step_low(uint8_t motors, uint32_t mark) {
     using namespace step_fast_path_detail;
-    while (((since - r32(systick::kCvr)) & 0xFFFFFFu) < fw::kStepHighTicks) {
+    while (elapsed(mark) < fw::kStepHighTicks) {
     }
     r32(kIobusA + port::kOutClr) = kGroupA.of[motors];
     if (kAnyOnB) r32(kIobusB + port::kOutClr) = kGroupB.of[motors];
   }
   void set_dir(uint8_t index, bool reverse) { pin_set(board::kDrivers[index].dir, reverse); }
-  uint32_t elapsed() { return (entry_ - r32(systick::kCvr)) & 0xFFFFFFu; }
-  void wait_for(uint32_t ticks) {
-    while (elapsed() < ticks) {
+  void wait_for(uint32_t mark, uint32_t ticks) {
+    while (elapsed(mark) < ticks) {
     }
   }
-  void arm(uint32_t when) { timer_.arm(when); }
+  // No wait for the write's synchronisation: the pulse's wait covers it, and a later write to
+  // the timer stalls until it is done.
+  void arm(uint32_t when) { r32(kTc + tc::kCc0) = when; }
 
  private:
+  static constexpr uint32_t kTc = tc::kTc4;
   StepTimer& timer_;
-  uint32_t entry_;  // SysTick at the interrupt's entry
 };
 
-// The step timer's interrupt: counts an overflow, takes the entry time and plays the rings.
-inline void run_step_fast_path(StepTimer& timer, fw::StepEngine& engine) {
-  const uint32_t entry = r32(systick::kCvr);
-  const uint32_t now = timer.take_step_interrupt();
-  Samd21StepPort port(timer, entry);
-  fw::run_step_interrupt(engine, port, now);
+// The step timer's interrupt: plays the rings (in RAM with its callees, main.cpp).
+HMC_STEP_INLINE void run_step_fast_path(StepTimer& timer, fw::StepEngine& engine) {
+  Samd21StepPort port(timer);
+  fw::run_step_interrupt(engine, port);
 }
 
 }  // namespace hmc::samd21

@@ -37,7 +37,6 @@ void StepTimer::start() {
   r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntOvf | tc::kIntMc0);
   r8(kTc + tc::kIntEnSet) = static_cast<uint8_t>(tc::kIntOvf | tc::kIntMc0);
   high_ = 0;
-  armed_ = 0xFFFFFFFFu;
   // SysTick free-running at the CPU clock, no interrupt: the step interrupt's stopwatch.
   r32(systick::kRvr) = 0xFFFFFFu;
   r32(systick::kCvr) = 0;
@@ -65,33 +64,18 @@ hal::Ticks StepTimer::now() const {
   return t;
 }
 
+// The compare belongs to the step interrupt, which enters by it with the STEP it prepared for
+// that time (step_engine.h): the core asks only for an interrupt now (StepScheduler::kick), and
+// an earlier entry than `when` is harmless (the interrupt steps only what is due).
 void StepTimer::schedule(hal::Ticks when) {
-  const uint32_t primask = irq_save();
-  if (now_masked() >= when) {
-    nvic_pend(irqn::kTc4);
-  } else {
-    arm(static_cast<uint32_t>(when));
-    if (now_masked() >= when) nvic_pend(irqn::kTc4);  // passed while the write synchronised
-  }
-  irq_restore(primask);
-}
-
-void StepTimer::arm(uint32_t when) {
-  armed_ = when;
-  r32(kTc + tc::kCc0) = when;
-  sync();
+  (void)when;
+  nvic_pend(irqn::kTc4);
 }
 
 uint32_t StepTimer::take_step_interrupt() {
   const uint32_t flags = r8(kTc + tc::kIntFlag) & (tc::kIntOvf | tc::kIntMc0);
-  if ((flags & tc::kIntOvf) != 0) {
-    r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntOvf);  // write 1 to clear
-    high_ = high_ + 1u;
-  }
-  if ((flags & tc::kIntMc0) != 0) {
-    r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntMc0);
-    return armed_;
-  }
+  r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(flags);  // write 1 to clear
+  if ((flags & tc::kIntOvf) != 0) high_ = high_ + 1u;
   return read_count();
 }
 

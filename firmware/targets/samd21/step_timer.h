@@ -4,10 +4,11 @@
 // the step interrupt's short waits (step_fast_path.h).
 //
 // Contract: now() is the 64-bit tick count (main loop). The step interrupt works on the low 32
-// bits (step_engine.h): take_step_interrupt() gives its "now", arm() sets the next compare, which
-// the engine writes only for a time at least its own cost away. schedule(when), the core's
-// "run the interrupt now" (StepScheduler::kick), pends the interrupt for a time already past
-// and arms the compare otherwise.
+// bits (step_engine.h) and owns the compare: its port (step_fast_path.h) writes CC0 and clears
+// the compare's flag itself; an entry by anything else calls take_step_interrupt(), which
+// clears the flags, counts an overflow and returns the counter as the interrupt's "now".
+// schedule(when), the core's "run the interrupt now" (StepScheduler::kick), pends the
+// interrupt.
 //
 // Counter reads use a read request per read (READREQ.RREQ), not continuous read
 // synchronisation: the value is then the count at the request, never an older one, which the
@@ -28,18 +29,14 @@ class StepTimer final : public hal::StepTimer {
   hal::Ticks now() const override;
   void schedule(hal::Ticks when) override;
 
-  // The interrupt's first call: clears the flags, counts an overflow, and returns the time the
-  // step engine takes as now: the compare value when it fired, else (pended, or an overflow
-  // alone) the counter.
+  // The interrupt entered by a pend or an overflow: clears both flags, counts an overflow, and
+  // returns the counter (low 32 bits).
   uint32_t take_step_interrupt();
-  // The step interrupt: the next compare at `when` (low 32 bits).
-  void arm(uint32_t when);
 
  private:
   hal::Ticks now_masked() const;  // with interrupts masked
 
-  volatile uint32_t high_ = 0;   // overflows counted so far
-  volatile uint32_t armed_ = 0;  // the compare value
+  volatile uint32_t high_ = 0;  // overflows counted so far
 };
 
 }  // namespace hmc::samd21

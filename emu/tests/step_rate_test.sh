@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# The spec's fastest frames on the real image in hmc-emu: the three 20 us moves sent together
+# (STX#6#STM#1#1#8#0#20#30#ETX and the same for motors 2 and 3, 150 000 steps/s in all). The step
+# budget at constant rate is 75 000 steps/s (firmware/core/protocol_facts.h, from the measured
+# cycles): the first is accepted, the other two are refused (rate_limit). Motor 1's axis is wide
+# enough that no switch is reached; over one second of virtual time it makes 50 000 ± 1 steps
+# (hmc-emu's window starts at the first chunk boundary after 0.3 s: the count is compared with
+# 50 000 a second over the window it reports).
+# Usage: step_rate_test.sh HMC_EMU IMAGE_DIR
+# Without the images the test is skipped (77), unless CI=true.
+set -uo pipefail
+emu=$1
+image=$2/hmc-firmware.elf
+if [[ ! -f $image ]]; then
+  [[ ${CI:-} == true ]] && { echo "FAIL: no $image (build the firmware preset first)"; exit 1; }
+  echo "SKIP: no $image"; exit 77
+fi
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+# Standard input stays open until --max-time ends the run (at its end hmc-emu would stop early).
+exec 3< <(printf 'STX#6#STM#1#1#8#0#20#30#ETX\nSTX#6#STM#2#1#8#0#20#31#ETX\nSTX#6#STM#3#1#8#0#20#32#ETX\n'
+          exec sleep 120 2>/dev/null)
+feeder=$!
+timeout 100 "$emu" "$image" --fast --quiet --stats --measure-from 0.3 --max-time 1.3 \
+  --axis 1:0:200000000:100000000 --axis 2:0:200000000:100000000 <&3 >"$work/out" 2>"$work/err"
+kill "$feeder" 2>/dev/null
+exec 3<&-
+replies=$(grep -c . "$work/out")
+window=$(grep -o 'steps [0-9]* [0-9]* [0-9]*' "$work/err")
+read -r from to < <(grep -o 'measured from [0-9.]* s to [0-9.]* s' "$work/err" | awk '{print $3, $6}')
+share=$(grep -o 'exception 35: [0-9]* entries, [0-9.]* cycles each, [0-9]* cycles ([0-9.]* %' "$work/err" | grep -o '[0-9.]* %')
+read -r _ m1 m2 m3 <<<"$window"
+echo "replies: $(tr '\n' ' ' <"$work/out"); window 0.3-1.3 s: $window; step interrupt: ${share:-?} of the CPU"
+if [[ -z $m1 ]]; then echo "FAIL: no figures from hmc-emu:"; cat "$work/err"; exit 1; fi
+# Replies in order (events aside): rate_limit (15) on the delay token (7) at column 18.
+want='STX#1#ACK#0#ETX
+STX#4#NAK#15#7#18#40#ETX
+STX#4#NAK#15#7#18#40#ETX'
+if [[ $(grep -v '^STX#[0-9]*#EV' "$work/out" | head -3) != "$want" ]]; then
+  echo "FAIL: expected ACK for motor 1 and rate_limit refusals for motors 2 and 3 ($replies lines)"
+  exit 1
+fi
+expected=$(awk -v a="$from" -v b="$to" 'BEGIN { printf "%.1f", (b - a) * 50000 }')
+echo "motor 1: $m1 steps from $from s to $to s, $expected at 50 000 a second"
+if ! awk -v n="$m1" -v e="$expected" 'BEGIN { exit !(n - e <= 1 && e - n <= 1) }' || (( m2 != 0 || m3 != 0 )); then
+  echo "FAIL: expected 50 000 ± 1 steps a second of motor 1 alone"; exit 1
+fi
+echo "ok"
