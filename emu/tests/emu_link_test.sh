@@ -3,8 +3,9 @@
 # starts hmc-emu itself) a ramped move waited for gives hmc-sim's result and status reads as
 # hmc-sim's, homing finds a switch placed with axis=; through hmc-emu --tcp with --control, an
 # emergency press on the control channel ends a waited move (hmc reports it, exit 5) and the
-# motors stop, and a driver fault is reported; the emergency press again through emu://'s own
-# control=; every hmc-emu that hmc started ends with it, also when hmc is killed.
+# motors stop, a driver fault is reported, and `hmc servo`/`hmc led` reach the devices on the pins
+# (the trace: the servo's pulse, the strip's colour decoded from its bitstream); the emergency
+# press again through emu://'s own control=; the trace= option; every hmc-emu that hmc started ends with it, also when hmc is killed.
 # hmc-sim's board is sim:// here: the same board as the hmc-sim program's, in hmc's process.
 # Usage: emu_link_test.sh HMC_EMU HMC IMAGE_DIR [quick]
 #   quick (the sanitizer presets): only the move, the kill and the port errors.
@@ -118,7 +119,8 @@ if [[ $quick != quick ]]; then
 
   # 6. A board that stays up (hmc-emu --tcp) with the control channel: the emergency switch
   # pressed while hmc waits for a long move.
-  "$emu_real" "$image" --fast --quiet --tcp 127.0.0.1:0 --control 127.0.0.1:0 --hold-input 1 2>"$work/board.err" &
+  "$emu_real" "$image" --fast --quiet --tcp 127.0.0.1:0 --control 127.0.0.1:0 --hold-input 1 \
+    --trace "$work/board.trace" 2>"$work/board.err" &
   pid=$!
   pids+=("$pid")
   tcp=$(announced board 's/^hmc-emu: listening on \(tcp:\/\/127\.0\.0\.1:[0-9]*\)$/\1/p')
@@ -188,10 +190,25 @@ if [[ $quick != quick ]]; then
   await_exit "$monitor_pid" 10
   control "press 3 0"
   check "control: a refused command" "error: motor '3': only motors 1 and 2 have limit switches" "$answer"
+  # A servo and a strip, as the devices on the image's pins see them (the trace, written out when
+  # hmc-emu ends): servo 1's last pulse before its release, for 135 degrees 544 + 135 × 1856 / 180
+  # µs rounded (servo_pwm.h), and strip 2's colour as the bitstream carries it, each value scaled by the board's brightness
+  # 100 of 255: v × 101 >> 8 (board.h kLedBrightness, sk6812.h scale()).
+  control "estop release"
+  check "estop release: control answer" "ok" "$answer"
+  out=$("$hmc" --port "$tcp" --timeout 5000 servo 1 135 2>&1)
+  check_match "servo: hmc's report" '^servo 1 \(pan\) to 135 degrees$' "$out"
+  out=$("$hmc" --port "$tcp" --timeout 5000 led 2 '#102030ff' 2>&1)
+  check_match "led: hmc's report" '^LED strip 2 to R16 G32 B48 W255$' "$out"
+  sleep 0.3  # virtual time runs unthrottled (--fast): far more than a servo period and a latch
   exec 3>&-
   kill -TERM "$pid"
   await_exit "$pid" 10
   check "hmc-emu --tcp: exit code after SIGTERM" 0 "$finished"
+  check "servo: the pulse on servo 1's pin" '"pulse_us":1936}' \
+    "$(grep '"ev":"servo","servo":1,' "$work/board.trace" | grep -v released | tail -n 1 | grep -o '"pulse_us":[0-9]*}')"
+  check "led: strip 2's colour decoded from its bitstream" '"r":6,"g":12,"b":18,"w":100}' \
+    "$(grep '"ev":"led","strip":2,' "$work/board.trace" | tail -n 1 | grep -o '"r":.*}')"
 
   # 7. The same through emu://'s own control channel (control=): hmc-emu prints its address on
   # hmc's standard error before the board answers.
