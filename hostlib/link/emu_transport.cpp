@@ -235,16 +235,10 @@ Result<EmuPortOptions> parse_emu_url(std::string_view url) {
   EmuPortOptions options;
   options.image = std::string(rest.substr(0, question));
   if (question == std::string_view::npos) return options;
-  std::string_view query = rest.substr(question + 1);
-  while (!query.empty()) {
-    const size_t amp = query.find('&');
-    const std::string_view item = query.substr(0, amp);
-    query = amp == std::string_view::npos ? std::string_view{} : query.substr(amp + 1);
-    if (item.empty()) continue;
-    const size_t equals = item.find('=');
-    const std::string_view key = item.substr(0, equals);
-    const bool has_value = equals != std::string_view::npos;
-    const std::string value(has_value ? item.substr(equals + 1) : std::string_view{});
+  for (const detail::UrlOption& option : detail::url_options(rest.substr(question + 1))) {
+    const std::string_view key = option.key;
+    const bool has_value = option.has_value;
+    const std::string value(option.value);
     const auto needs_value = [&](const char* form) {
       return Error{std::string(url) + ": option '" + std::string(key) + "' needs a value: " + form};
     };

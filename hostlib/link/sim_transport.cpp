@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "sim_board.h"
+#include "transports.h"
 
 namespace hmc {
 namespace {
@@ -314,14 +315,6 @@ class SimTransport final : public Transport {
 };
 
 // Closes a file descriptor unless released.
-struct FdGuard {
-  int fd;
-  ~FdGuard() {
-    if (fd >= 0) ::close(fd);
-  }
-  int release() { return std::exchange(fd, -1); }
-};
-
 }  // namespace
 
 Result<SimPortOptions> parse_sim_url(std::string_view url) {
@@ -342,16 +335,10 @@ Result<SimPortOptions> parse_sim_url(std::string_view url) {
   }
   if (question == std::string_view::npos) return options;
 
-  std::string_view query = rest.substr(question + 1);
-  while (!query.empty()) {
-    const size_t amp = query.find('&');
-    const std::string_view item = query.substr(0, amp);
-    query = amp == std::string_view::npos ? std::string_view{} : query.substr(amp + 1);
-    if (item.empty()) continue;
-    const size_t equals = item.find('=');
-    const std::string_view key = item.substr(0, equals);
-    const bool has_value = equals != std::string_view::npos;
-    const std::string_view value = has_value ? item.substr(equals + 1) : std::string_view{};
+  for (const detail::UrlOption& option : detail::url_options(rest.substr(question + 1))) {
+    const std::string_view key = option.key;
+    const bool has_value = option.has_value;
+    const std::string_view value = option.value;
     bool* flag = nullptr;
     bool flag_value = true;
     if (key == "fast") {
@@ -406,12 +393,12 @@ Result<std::unique_ptr<Transport>> open_sim_port(std::string_view url, const Por
                  " (set HMC_SIM_STATE to a writable directory)"};
   }
   const std::string path = *dir + "/" + journal_file_name(options, port.baud);
-  FdGuard fd{::open(path.c_str(), O_RDWR | O_CREAT | O_APPEND | O_CLOEXEC, 0644)};
-  if (fd.fd < 0) {
+  UniqueFd fd(::open(path.c_str(), O_RDWR | O_CREAT | O_APPEND | O_CLOEXEC, 0644));
+  if (fd.get() < 0) {
     return Error{"cannot open the state of " + board_url + ", '" + path + "': " + errno_text(errno) +
                  " (set HMC_SIM_STATE to a writable directory)"};
   }
-  while (::flock(fd.fd, LOCK_EX | LOCK_NB) != 0) {
+  while (::flock(fd.get(), LOCK_EX | LOCK_NB) != 0) {
     if (errno == EINTR) continue;
     if (errno == EWOULDBLOCK) return Error{board_url + " is in use by another program"};
     return Error{"cannot lock the state of " + board_url + ", '" + path + "': " + errno_text(errno)};
@@ -421,12 +408,12 @@ Result<std::unique_ptr<Transport>> open_sim_port(std::string_view url, const Por
   std::optional<Journal> journal;
   std::string note;
   if (options.fresh) {
-    if (options.keep && ::ftruncate(fd.fd, 0) != 0) {
+    if (options.keep && ::ftruncate(fd.get(), 0) != 0) {
       return Error{"cannot forget the state of " + board_url + ", '" + path + "': " + errno_text(errno)};
     }
   } else {
     // A journal that cannot be replayed never keeps the board from opening: it starts fresh.
-    Result<std::string> text = read_all(fd.fd);
+    Result<std::string> text = read_all(fd.get());
     std::string problem;
     if (!text) {
       problem = "its saved state could not be read (" + text.error().message + ")";
@@ -447,7 +434,7 @@ Result<std::unique_ptr<Transport>> open_sim_port(std::string_view url, const Por
           std::ofstream(aside, std::ios::binary | std::ios::trunc) << *text;
           note += "; the old journal is in " + aside;
         }
-        if (::ftruncate(fd.fd, 0) != 0) {
+        if (::ftruncate(fd.get(), 0) != 0) {
           return Error{"cannot replace the unreadable state of " + board_url + ", '" + path +
                        "': " + errno_text(errno)};
         }
@@ -455,7 +442,7 @@ Result<std::unique_ptr<Transport>> open_sim_port(std::string_view url, const Por
     }
   }
   if (options.keep && !journal) {
-    const Status started = write_all(fd.fd, header + "\n");
+    const Status started = write_all(fd.get(), header + "\n");
     if (!started) {
       return Error{"cannot write the state of " + board_url + ", '" + path + "': " + started.error().message};
     }

@@ -24,6 +24,20 @@
 namespace hmc {
 namespace detail {
 
+std::vector<UrlOption> url_options(std::string_view query) {
+  std::vector<UrlOption> options;
+  while (!query.empty()) {
+    const size_t amp = query.find('&');
+    const std::string_view item = query.substr(0, amp);
+    query = amp == std::string_view::npos ? std::string_view{} : query.substr(amp + 1);
+    if (item.empty()) continue;
+    const size_t equals = item.find('=');
+    const bool has_value = equals != std::string_view::npos;
+    options.push_back({item.substr(0, equals), has_value, has_value ? item.substr(equals + 1) : std::string_view{}});
+  }
+  return options;
+}
+
 std::string no_such_port_message(const std::string& name) {
   return "no such port " + name + " (hmc ports lists the ports this machine has)";
 }

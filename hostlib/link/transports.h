@@ -10,6 +10,7 @@
 #include <string>
 #include <string_view>
 #include <utility>
+#include <vector>
 
 #include "hmc/result.h"
 #include "hmc/transport.h"
@@ -18,6 +19,16 @@
 namespace hmc::detail {
 
 using TransportResult = Result<std::unique_ptr<Transport>>;
+
+// One option of a port URL (sim://, emu://): after '?', options are separated by '&' and each is
+// `key` or `key=value`.
+struct UrlOption {
+  std::string_view key;
+  bool has_value = false;
+  std::string_view value;  // empty without '='
+};
+// The options in `query` (what follows '?') in order; empty items are skipped.
+std::vector<UrlOption> url_options(std::string_view query);
 
 // `path`: a serial device (symlinks allowed); `name`: what the user called it, for messages.
 TransportResult open_serial_port(const std::string& name, const std::string& path, const PortOptions& options);
