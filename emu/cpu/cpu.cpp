@@ -181,10 +181,33 @@ bool Cpu::reset(uint32_t vector_table, std::string& error) {
   return true;
 }
 
-// Each translated block is analysed once; flash blocks by their start address in a flat table.
+// Each translated block is analysed once; flash blocks by their start address in a flat
+// table, RAM blocks likewise while their bytes are unchanged.
 const Cpu::BlockCost& Cpu::block_cost(uint64_t address, uint32_t size) {
   BlockCost* cached = address < kFlashSize ? &flash_costs_[address / 2] : nullptr;
   if (cached != nullptr && cached->size == size) return *cached;
+  // (A block ends within a 1 KiB page, so its cycles fit the table's fields.)
+  if (address >= kRamBase && address - kRamBase + size <= kRamSize && size <= 1024) {
+    const uint8_t* code = ram_.data() + (address - kRamBase);
+    BlockCost& ram = ram_costs_[(address - kRamBase) / 2];
+    if (ram.size == size && std::memcmp(code, ram_code_.data() + ram.code_at, size) == 0) {
+      return ram;
+    }
+    if (ram_code_.size() > (1u << 22)) {
+      for (BlockCost& c : ram_costs_) c = BlockCost{};
+      ram_code_.clear();
+    }
+    const ThumbBlock block =
+        analyse_thumb_block(code, size, static_cast<uint32_t>(address), kFlashSize, nullptr);
+    ram = BlockCost{};
+    ram.size = static_cast<uint16_t>(size);
+    ram.cycles = static_cast<uint16_t>(block.cycles);
+    ram.instructions = static_cast<uint16_t>(block.instructions);
+    ram.code_at = static_cast<uint32_t>(ram_code_.size());
+    ram.ends_in_conditional_branch = block.ends_in_conditional_branch;
+    ram_code_.insert(ram_code_.end(), code, code + size);
+    return ram;
+  }
   if (flash_lines_.size() > (1u << 22)) {
     // Blocks re-translated with other sizes left old line lists behind: start afresh.
     for (BlockCost& c : flash_costs_) c = BlockCost{};

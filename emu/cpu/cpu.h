@@ -105,6 +105,7 @@ class Cpu : public Memory {
     uint16_t instructions = 0;
     uint16_t lines = 0;       // flash lines read, in flash_lines_ from lines_at
     uint32_t lines_at = 0;
+    uint32_t code_at = 0;     // RAM blocks: the bytes analysed, in ram_code_ from code_at
     bool ends_in_conditional_branch = false;
   };
   const BlockCost& block_cost(uint64_t address, uint32_t size);
@@ -130,6 +131,10 @@ class Cpu : public Memory {
   // Flash blocks by start address (halfword index); other blocks are analysed on each run.
   std::vector<BlockCost> flash_costs_ = std::vector<BlockCost>(256 * 1024 / 2);
   std::vector<uint32_t> flash_lines_;  // the flash blocks' line lists, back to back
+  // RAM blocks (the step interrupt runs from RAM) likewise, kept while their bytes are the ones
+  // analysed: RAM can be rewritten under the same address.
+  std::vector<BlockCost> ram_costs_ = std::vector<BlockCost>(32 * 1024 / 2);
+  std::vector<uint8_t> ram_code_;  // the RAM blocks' bytes, back to back
   BlockCost scratch_cost_;
   std::vector<uint32_t> scratch_lines_;
   // The NVM cache: direct-mapped, 8 lines of 64 bits (SAMD21 datasheet, NVMCTRL "Cache"); the
