@@ -57,6 +57,10 @@
 #define HMC_STEP_RAMFUNC
 #endif
 #define HMC_STEP_INLINE __attribute__((always_inline)) inline
+// The common case of a branch (a constant-rate step of a lane whose segment goes on): -Os then
+// lays it out as the straight line, the rare case as the jump.
+#define HMC_STEP_LIKELY(x) __builtin_expect(!!(x), 1)
+#define HMC_STEP_UNLIKELY(x) __builtin_expect(!!(x), 0)
 
 namespace hmc::fw {
 
@@ -224,18 +228,92 @@ inline void take_requests(StepEngine& e) {
 HMC_STEP_INLINE void advance(StepEngine& e, uint8_t i, uint8_t bit) {
   StepLane& lane = *based(&e.lanes[i]);
   const uint32_t at = e.next[i];
-  if ((e.stepping & bit) != 0) {
+  if (HMC_STEP_LIKELY((e.stepping & bit) != 0)) {
     lane.position += lane.position_step;
     ++lane.fired;
     ++lane.total;
     lane.last_interval = at - lane.last_step;
     lane.last_step = at;
   }
-  if (lane.left != kEndlessEvents && --lane.left == 0) {
+  if (HMC_STEP_UNLIKELY(lane.left != kEndlessEvents && --lane.left == 0)) {
     load_segment(e, i);
   } else {
     e.next[i] = at + lane.interval;
   }
+}
+
+// One pass of the interrupt, STEP high on `steps` since `mark`: the due motors' DIR and next
+// events, the earliest event left (e.next_when, next_due, next_steps), its compare, STEP low.
+// False when that event is too close to leave for: the caller waits for it and passes again.
+template <class Port>
+HMC_STEP_INLINE bool step_pass(StepEngine& e, Port& port, uint8_t due, uint8_t steps, uint32_t now,
+                               uint32_t entry, uint32_t entry_mark, uint32_t mark, bool waited) {
+  // While the pulse is high: the due motors' DIR and next events.
+#pragma GCC unroll 3
+  for (uint8_t i = 0; i < 3; ++i) {
+    const uint8_t bit = uint8_t(1u << i);
+    if ((due & bit) == 0) continue;
+    const uint8_t flags = e.lanes[i].flags;
+    if (HMC_STEP_UNLIKELY((flags & kSegDir) != 0)) port.set_dir(i, (flags & kSegReverse) != 0);
+    advance(e, i, bit);
+  }
+  // The earliest event left and the motors due then.
+  int32_t best = 0x7FFFFFFF;
+  uint8_t next_due = 0;
+  const uint8_t armed = e.armed;
+#pragma GCC unroll 3
+  for (uint8_t i = 0; i < 3; ++i) {
+    const uint8_t bit = uint8_t(1u << i);
+    if ((armed & bit) == 0) continue;
+    const int32_t d = static_cast<int32_t>(e.next[i] - now);
+    if (d < best) {
+      best = d;
+      next_due = bit;
+    } else if (d == best) {
+      next_due |= bit;
+    }
+  }
+  const uint8_t next_steps = next_due & e.stepping;
+  const uint32_t when = now + static_cast<uint32_t>(best);
+  e.next_when = when;
+  e.next_due = next_due;
+  e.next_steps = next_steps;
+  // Time has passed since entry (the pulse so far, at least): compare what is left. The port's
+  // clock and waits count from the entry, not from `now`, which moves on with each pass:
+  // measured from `now`, a second pass found every event already due and stepped the ring
+  // empty as fast as the CPU ran.
+  const int32_t after_entry = static_cast<int32_t>(when - entry);
+  bool leave = true;
+  if (HMC_STEP_LIKELY(next_due != 0)) {
+    if (HMC_STEP_LIKELY(after_entry - static_cast<int32_t>(port.elapsed(entry_mark)) >=
+                        static_cast<int32_t>(Port::kCostTicks))) {
+      port.arm(when);  // its synchronisation overlaps the rest of the pulse
+      // After a wait inside, the old compare (an event this interrupt has made) may have matched
+      // meanwhile: its flag would bring the next entry in early, to raise STEP for `when` at
+      // once. The old value is past, so no match comes before the new one is live.
+      if (HMC_STEP_UNLIKELY(waited)) port.ack_event();
+      e.next_armed = 1;
+    } else {
+      leave = false;
+    }
+  }
+  if (steps != 0) port.step_low(steps, mark);
+  return leave;
+}
+
+// Due before the interrupt could return and come back: waits for the event step_pass left in
+// the engine, raises its STEP, and makes it the next pass's.
+template <class Port>
+HMC_STEP_INLINE void next_waited_event(StepEngine& e, Port& port, uint32_t entry, uint32_t entry_mark,
+                                       uint32_t& now, uint8_t& due, uint8_t& steps, uint32_t& mark) {
+  const uint32_t when = e.next_when;
+  const int32_t after_entry = static_cast<int32_t>(when - entry);
+  if (after_entry > 0) port.wait_for(entry_mark, static_cast<uint32_t>(after_entry));
+  now = when;
+  due = e.next_due;
+  steps = e.next_steps;
+  if (steps != 0) port.step_high(steps);
+  mark = port.stopwatch();
 }
 
 }  // namespace step_engine_detail
@@ -249,7 +327,7 @@ HMC_STEP_INLINE void run_step_interrupt(StepEngine& engine, Port& port) {
   uint8_t steps;
   uint32_t now;
   const bool fired = port.event_fired(e) && load8(e.pending) == 0;
-  if (fired) {
+  if (HMC_STEP_LIKELY(fired)) {
     steps = e.next_steps;
     if (steps != 0) port.step_high(steps);
     port.ack_event();
@@ -279,69 +357,22 @@ HMC_STEP_INLINE void run_step_interrupt(StepEngine& engine, Port& port) {
   // entry's latency), so an event waited for inside comes as late after its time as one that
   // enters the interrupt.
   const uint32_t entry_mark = port.stopwatch();
-  uint32_t mark = entry_mark;
   const uint32_t entry = now;
+  // The fast entry's first pass is peeled off the loop: with `now`, the mark and "not waited"
+  // known constants there, its values stay in registers (in the loop -Os kept them on the stack).
+  if (HMC_STEP_LIKELY(fired) &&
+      HMC_STEP_LIKELY(step_pass(e, port, due, steps, entry, entry, entry_mark, entry_mark, false))) {
+    return;
+  }
   bool waited = !fired;  // a slow entry may wait for the event its compare is armed for
-  for (;;) {
-    // While the pulse is high: the due motors' DIR and next events.
-#pragma GCC unroll 3
-    for (uint8_t i = 0; i < 3; ++i) {
-      const uint8_t bit = uint8_t(1u << i);
-      if ((due & bit) == 0) continue;
-      const uint8_t flags = e.lanes[i].flags;
-      if ((flags & kSegDir) != 0) port.set_dir(i, (flags & kSegReverse) != 0);
-      advance(e, i, bit);
-    }
-    // The earliest event left and the motors due then.
-    int32_t best = 0x7FFFFFFF;
-    uint8_t next_due = 0;
-    const uint8_t armed = e.armed;
-#pragma GCC unroll 3
-    for (uint8_t i = 0; i < 3; ++i) {
-      const uint8_t bit = uint8_t(1u << i);
-      if ((armed & bit) == 0) continue;
-      const int32_t d = static_cast<int32_t>(e.next[i] - now);
-      if (d < best) {
-        best = d;
-        next_due = bit;
-      } else if (d == best) {
-        next_due |= bit;
-      }
-    }
-    const uint8_t next_steps = next_due & e.stepping;
-    const uint32_t when = now + static_cast<uint32_t>(best);
-    e.next_when = when;
-    e.next_due = next_due;
-    e.next_steps = next_steps;
-    // Time has passed since entry (the pulse so far, at least): compare what is left. The
-    // port's clock and waits count from the entry, not from `now`, which moves on with each
-    // pass: measured from `now`, a second pass found every event already due and stepped the
-    // ring empty as fast as the CPU ran.
-    const int32_t after_entry = static_cast<int32_t>(when - entry);
-    bool leave = true;
-    if (next_due != 0) {
-      if (after_entry - static_cast<int32_t>(port.elapsed(entry_mark)) >=
-          static_cast<int32_t>(Port::kCostTicks)) {
-        port.arm(when);  // its synchronisation overlaps the rest of the pulse
-        // After a wait inside, the old compare (an event this interrupt has made) may have
-        // matched meanwhile: its flag would bring the next entry in early, to raise STEP for
-        // `when` at once. The old value is past, so no match comes before the new one is live.
-        if (waited) port.ack_event();
-        e.next_armed = 1;
-      } else {
-        leave = false;
-      }
-    }
-    if (steps != 0) port.step_low(steps, mark);
-    if (leave) return;
-    // Due before the interrupt could return and come back: wait for it here.
-    if (after_entry > 0) port.wait_for(entry_mark, static_cast<uint32_t>(after_entry));
+  uint32_t mark = entry_mark;
+  if (fired) {
+    next_waited_event(e, port, entry, entry_mark, now, due, steps, mark);
     waited = true;
-    now = when;
-    due = next_due;
-    steps = next_steps;
-    if (steps != 0) port.step_high(steps);
-    mark = port.stopwatch();
+  }
+  while (!step_pass(e, port, due, steps, now, entry, entry_mark, mark, waited)) {
+    next_waited_event(e, port, entry, entry_mark, now, due, steps, mark);
+    waited = true;
   }
 }
 

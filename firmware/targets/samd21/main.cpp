@@ -55,7 +55,7 @@ volatile samd21::ClockSource clock_source;
 }  // namespace
 
 // In RAM (.ramfunc, samd21_sections.ld): no flash wait states on the step path.
-extern "C" __attribute__((section(".ramfunc.irq_tc4"))) void irq_tc4() {
+extern "C" __attribute__((section(".ramfunc.irq_tc4"), optimize("reorder-blocks-algorithm=stc"))) void irq_tc4() {
   samd21::run_step_fast_path(step_timer, controller.step_engine());
 }
 
