@@ -102,11 +102,17 @@ struct StepLane {
   int16_t position_step;
   uint32_t interval;   // of the playing segment
   uint32_t left;       // events of the playing segment from `next` on
-  int32_t position;    // 1/256 step
-  uint32_t fired;      // steps of the current move
   uint32_t total;        // steps since power-up (wraps)
   uint32_t last_step;    // time of the last step
   uint32_t last_interval;  // between the last two steps, 0 at rest
+  // A step counts only `total`: the position (1/256 step) is position_at + (total − total_at) ×
+  // position_step, the current move's steps total − fired_from. A segment that changes
+  // position_step folds the steps so far into position_at first and counts a fold, so the main
+  // loop reads a consistent set by reading `folds` before and after (StepScheduler::counts).
+  int32_t position_at;
+  uint32_t total_at;
+  uint32_t fired_from;
+  uint32_t folds;
   uint32_t finished;       // motions ended so far
   uint32_t halts;          // halts taken (one may have dropped a DIR change)
   StepSegment ring[kRingSize];
@@ -142,6 +148,18 @@ HMC_STEP_INLINE T* based(T* p) {
   return p;
 }
 
+// A segment changes the lane's position_step (see StepLane): the steps so far go into
+// position_at.
+HMC_STEP_INLINE void fold_position(StepLane& lane, int16_t position_step) {
+  const uint32_t total = lane.total;
+  lane.position_at = static_cast<int32_t>(static_cast<uint32_t>(lane.position_at) +
+                                          (total - lane.total_at) *
+                                              static_cast<uint32_t>(static_cast<int32_t>(lane.position_step)));
+  lane.total_at = total;
+  lane.position_step = position_step;
+  ++lane.folds;
+}
+
 // Takes lane i's next segment, next[i] holding the last event's time. Drops what is left of a
 // halted move; passes end markers. Leaves the lane armed on its next event, or not armed.
 // Per event while ramping (a ramp step is a segment of one): in RAM on the board.
@@ -160,8 +178,8 @@ HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
     const uint8_t flags = seg.flags;
     if ((flags & kSegStart) != 0) {
       lane.moving = 1;
-      lane.fired = 0;
-      lane.position_step = seg.position_step;
+      fold_position(lane, seg.position_step);
+      lane.fired_from = lane.total;
       e.next[i] = seg.interval;
       lane.last_step = seg.interval;
     } else if ((flags & kSegEnd) != 0) {
@@ -181,8 +199,8 @@ HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
     } else {
       e.next[i] += seg.interval;
       if ((flags & kSegMove) != 0) {
-        lane.fired = 0;
-        lane.position_step = seg.position_step;
+        fold_position(lane, seg.position_step);
+        lane.fired_from = lane.total;
       }
     }
     lane.interval = seg.interval;
@@ -229,8 +247,6 @@ HMC_STEP_INLINE void advance(StepEngine& e, uint8_t i, uint8_t bit) {
   StepLane& lane = *based(&e.lanes[i]);
   const uint32_t at = e.next[i];
   if (HMC_STEP_LIKELY((e.stepping & bit) != 0)) {
-    lane.position += lane.position_step;
-    ++lane.fired;
     ++lane.total;
     lane.last_interval = at - lane.last_step;
     lane.last_step = at;
