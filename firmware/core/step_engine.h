@@ -252,6 +252,22 @@ HMC_STEP_INLINE void advance(StepEngine& e, uint8_t i, uint8_t bit) {
     lane.last_step = at;
   }
   if (HMC_STEP_UNLIKELY(lane.left != kEndlessEvents && --lane.left == 0)) {
+    // A ramp's next step (a plain stepping segment after another): taken here, without the
+    // call; anything else (a start, an end, DIR, a wait, a replacing move, an empty ring) is
+    // load_segment's.
+    const uint8_t head = lane.head;
+    if (lane.flags == 0 && head != load8(lane.tail)) {
+      fence();
+      const StepSegment& seg = lane.ring[head & (kRingSize - 1)];
+      if (seg.flags == 0) {
+        e.next[i] = at + seg.interval;
+        lane.interval = seg.interval;
+        lane.left = seg.count;
+        fence();
+        store8(lane.head, static_cast<uint8_t>(head + 1));
+        return;
+      }
+    }
     load_segment(e, i);
   } else {
     e.next[i] = at + lane.interval;
