@@ -152,9 +152,9 @@ HMC_STEP_INLINE T* based(T* p) {
 // position_at.
 HMC_STEP_INLINE void fold_position(StepLane& lane, int16_t position_step) {
   const uint32_t total = lane.total;
-  lane.position_at = static_cast<int32_t>(static_cast<uint32_t>(lane.position_at) +
-                                          (total - lane.total_at) *
-                                              static_cast<uint32_t>(static_cast<int32_t>(lane.position_step)));
+  const uint32_t step = static_cast<uint32_t>(static_cast<int32_t>(lane.position_step));
+  const uint32_t at = static_cast<uint32_t>(lane.position_at);
+  lane.position_at = static_cast<int32_t>(at + (total - lane.total_at) * step);
   lane.total_at = total;
   lane.position_step = position_step;
   ++lane.folds;
@@ -336,8 +336,9 @@ HMC_STEP_INLINE bool step_pass(StepEngine& e, Port& port, uint8_t due, uint8_t s
 // Due before the interrupt could return and come back: waits for the event step_pass left in
 // the engine, raises its STEP, and makes it the next pass's.
 template <class Port>
-HMC_STEP_INLINE void next_waited_event(StepEngine& e, Port& port, uint32_t entry, uint32_t entry_mark,
-                                       uint32_t& now, uint8_t& due, uint8_t& steps, uint32_t& mark) {
+HMC_STEP_INLINE void next_waited_event(StepEngine& e, Port& port, uint32_t entry,
+                                       uint32_t entry_mark, uint32_t& now, uint8_t& due,
+                                       uint8_t& steps, uint32_t& mark) {
   const uint32_t when = e.next_when;
   const int32_t after_entry = static_cast<int32_t>(when - entry);
   if (after_entry > 0) port.wait_for(entry_mark, static_cast<uint32_t>(after_entry));
@@ -392,8 +393,8 @@ HMC_STEP_INLINE void run_step_interrupt(StepEngine& engine, Port& port) {
   const uint32_t entry = now;
   // The fast entry's first pass is peeled off the loop: with `now`, the mark and "not waited"
   // known constants there, its values stay in registers (in the loop -Os kept them on the stack).
-  if (HMC_STEP_LIKELY(fired) &&
-      HMC_STEP_LIKELY(step_pass(e, port, due, steps, entry, entry, entry_mark, entry_mark, false))) {
+  if (HMC_STEP_LIKELY(fired) && HMC_STEP_LIKELY(step_pass(e, port, due, steps, entry, entry,
+                                                           entry_mark, entry_mark, false))) {
     return;
   }
   bool waited = !fired;  // a slow entry may wait for the event its compare is armed for

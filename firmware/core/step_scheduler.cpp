@@ -47,8 +47,8 @@ LaneCounts counts(const StepLane& lane) {
     const uint32_t total = load(lane.total);
     const uint32_t moved = (total - load(lane.total_at)) *
                            static_cast<uint32_t>(static_cast<int32_t>(load(lane.position_step)));
-    const LaneCounts out{static_cast<int32_t>(static_cast<uint32_t>(load(lane.position_at)) + moved),
-                         total - load(lane.fired_from)};
+    const uint32_t at = static_cast<uint32_t>(load(lane.position_at));
+    const LaneCounts out{static_cast<int32_t>(at + moved), total - load(lane.fired_from)};
     if (load(lane.folds) == folds) return out;
   }
 }
