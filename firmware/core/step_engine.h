@@ -57,6 +57,10 @@
 #define HMC_STEP_RAMFUNC
 #endif
 #define HMC_STEP_INLINE __attribute__((always_inline)) inline
+// The common case of a branch (a constant-rate step of a lane whose segment goes on): -Os then
+// lays it out as the straight line, the rare case as the jump.
+#define HMC_STEP_LIKELY(x) __builtin_expect(!!(x), 1)
+#define HMC_STEP_UNLIKELY(x) __builtin_expect(!!(x), 0)
 
 namespace hmc::fw {
 
@@ -98,11 +102,17 @@ struct StepLane {
   int16_t position_step;
   uint32_t interval;   // of the playing segment
   uint32_t left;       // events of the playing segment from `next` on
-  int32_t position;    // 1/256 step
-  uint32_t fired;      // steps of the current move
   uint32_t total;        // steps since power-up (wraps)
   uint32_t last_step;    // time of the last step
   uint32_t last_interval;  // between the last two steps, 0 at rest
+  // A step counts only `total`: the position (1/256 step) is position_at + (total − total_at) ×
+  // position_step, the current move's steps total − fired_from. A segment that changes
+  // position_step folds the steps so far into position_at first and counts a fold, so the main
+  // loop reads a consistent set by reading `folds` before and after (StepScheduler::counts).
+  int32_t position_at;
+  uint32_t total_at;
+  uint32_t fired_from;
+  uint32_t folds;
   uint32_t finished;       // motions ended so far
   uint32_t halts;          // halts taken (one may have dropped a DIR change)
   StepSegment ring[kRingSize];
@@ -138,6 +148,18 @@ HMC_STEP_INLINE T* based(T* p) {
   return p;
 }
 
+// A segment changes the lane's position_step (see StepLane): the steps so far go into
+// position_at.
+HMC_STEP_INLINE void fold_position(StepLane& lane, int16_t position_step) {
+  const uint32_t total = lane.total;
+  const uint32_t step = static_cast<uint32_t>(static_cast<int32_t>(lane.position_step));
+  const uint32_t at = static_cast<uint32_t>(lane.position_at);
+  lane.position_at = static_cast<int32_t>(at + (total - lane.total_at) * step);
+  lane.total_at = total;
+  lane.position_step = position_step;
+  ++lane.folds;
+}
+
 // Takes lane i's next segment, next[i] holding the last event's time. Drops what is left of a
 // halted move; passes end markers. Leaves the lane armed on its next event, or not armed.
 // Per event while ramping (a ramp step is a segment of one): in RAM on the board.
@@ -156,8 +178,8 @@ HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
     const uint8_t flags = seg.flags;
     if ((flags & kSegStart) != 0) {
       lane.moving = 1;
-      lane.fired = 0;
-      lane.position_step = seg.position_step;
+      fold_position(lane, seg.position_step);
+      lane.fired_from = lane.total;
       e.next[i] = seg.interval;
       lane.last_step = seg.interval;
     } else if ((flags & kSegEnd) != 0) {
@@ -177,8 +199,8 @@ HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
     } else {
       e.next[i] += seg.interval;
       if ((flags & kSegMove) != 0) {
-        lane.fired = 0;
-        lane.position_step = seg.position_step;
+        fold_position(lane, seg.position_step);
+        lane.fired_from = lane.total;
       }
     }
     lane.interval = seg.interval;
@@ -224,18 +246,107 @@ inline void take_requests(StepEngine& e) {
 HMC_STEP_INLINE void advance(StepEngine& e, uint8_t i, uint8_t bit) {
   StepLane& lane = *based(&e.lanes[i]);
   const uint32_t at = e.next[i];
-  if ((e.stepping & bit) != 0) {
-    lane.position += lane.position_step;
-    ++lane.fired;
+  if (HMC_STEP_LIKELY((e.stepping & bit) != 0)) {
     ++lane.total;
     lane.last_interval = at - lane.last_step;
     lane.last_step = at;
   }
-  if (lane.left != kEndlessEvents && --lane.left == 0) {
+  if (HMC_STEP_UNLIKELY(lane.left != kEndlessEvents && --lane.left == 0)) {
+    // A ramp's next step (a plain stepping segment after another): taken here, without the
+    // call; anything else (a start, an end, DIR, a wait, a replacing move, an empty ring) is
+    // load_segment's.
+    const uint8_t head = lane.head;
+    if (lane.flags == 0 && head != load8(lane.tail)) {
+      fence();
+      const StepSegment& seg = lane.ring[head & (kRingSize - 1)];
+      if (seg.flags == 0) {
+        e.next[i] = at + seg.interval;
+        lane.interval = seg.interval;
+        lane.left = seg.count;
+        fence();
+        store8(lane.head, static_cast<uint8_t>(head + 1));
+        return;
+      }
+    }
     load_segment(e, i);
   } else {
     e.next[i] = at + lane.interval;
   }
+}
+
+// One pass of the interrupt, STEP high on `steps` since `mark`: the due motors' DIR and next
+// events, the earliest event left (e.next_when, next_due, next_steps), its compare, STEP low.
+// False when that event is too close to leave for: the caller waits for it and passes again.
+template <class Port>
+HMC_STEP_INLINE bool step_pass(StepEngine& e, Port& port, uint8_t due, uint8_t steps, uint32_t now,
+                               uint32_t entry, uint32_t entry_mark, uint32_t mark, bool waited) {
+  // While the pulse is high: the due motors' DIR and next events.
+#pragma GCC unroll 3
+  for (uint8_t i = 0; i < 3; ++i) {
+    const uint8_t bit = uint8_t(1u << i);
+    if ((due & bit) == 0) continue;
+    const uint8_t flags = e.lanes[i].flags;
+    if (HMC_STEP_UNLIKELY((flags & kSegDir) != 0)) port.set_dir(i, (flags & kSegReverse) != 0);
+    advance(e, i, bit);
+  }
+  // The earliest event left and the motors due then.
+  int32_t best = 0x7FFFFFFF;
+  uint8_t next_due = 0;
+  const uint8_t armed = e.armed;
+#pragma GCC unroll 3
+  for (uint8_t i = 0; i < 3; ++i) {
+    const uint8_t bit = uint8_t(1u << i);
+    if ((armed & bit) == 0) continue;
+    const int32_t d = static_cast<int32_t>(e.next[i] - now);
+    if (d < best) {
+      best = d;
+      next_due = bit;
+    } else if (d == best) {
+      next_due |= bit;
+    }
+  }
+  const uint8_t next_steps = next_due & e.stepping;
+  const uint32_t when = now + static_cast<uint32_t>(best);
+  e.next_when = when;
+  e.next_due = next_due;
+  e.next_steps = next_steps;
+  // Time has passed since entry (the pulse so far, at least): compare what is left. The port's
+  // clock and waits count from the entry, not from `now`, which moves on with each pass:
+  // measured from `now`, a second pass found every event already due and stepped the ring
+  // empty as fast as the CPU ran.
+  const int32_t after_entry = static_cast<int32_t>(when - entry);
+  bool leave = true;
+  if (HMC_STEP_LIKELY(next_due != 0)) {
+    if (HMC_STEP_LIKELY(after_entry - static_cast<int32_t>(port.elapsed(entry_mark)) >=
+                        static_cast<int32_t>(Port::kCostTicks))) {
+      port.arm(when);  // its synchronisation overlaps the rest of the pulse
+      // After a wait inside, the old compare (an event this interrupt has made) may have matched
+      // meanwhile: its flag would bring the next entry in early, to raise STEP for `when` at
+      // once. The old value is past, so no match comes before the new one is live.
+      if (HMC_STEP_UNLIKELY(waited)) port.ack_event();
+      e.next_armed = 1;
+    } else {
+      leave = false;
+    }
+  }
+  if (steps != 0) port.step_low(steps, mark);
+  return leave;
+}
+
+// Due before the interrupt could return and come back: waits for the event step_pass left in
+// the engine, raises its STEP, and makes it the next pass's.
+template <class Port>
+HMC_STEP_INLINE void next_waited_event(StepEngine& e, Port& port, uint32_t entry,
+                                       uint32_t entry_mark, uint32_t& now, uint8_t& due,
+                                       uint8_t& steps, uint32_t& mark) {
+  const uint32_t when = e.next_when;
+  const int32_t after_entry = static_cast<int32_t>(when - entry);
+  if (after_entry > 0) port.wait_for(entry_mark, static_cast<uint32_t>(after_entry));
+  now = when;
+  due = e.next_due;
+  steps = e.next_steps;
+  if (steps != 0) port.step_high(steps);
+  mark = port.stopwatch();
 }
 
 }  // namespace step_engine_detail
@@ -249,7 +360,7 @@ HMC_STEP_INLINE void run_step_interrupt(StepEngine& engine, Port& port) {
   uint8_t steps;
   uint32_t now;
   const bool fired = port.event_fired(e) && load8(e.pending) == 0;
-  if (fired) {
+  if (HMC_STEP_LIKELY(fired)) {
     steps = e.next_steps;
     if (steps != 0) port.step_high(steps);
     port.ack_event();
@@ -279,69 +390,22 @@ HMC_STEP_INLINE void run_step_interrupt(StepEngine& engine, Port& port) {
   // entry's latency), so an event waited for inside comes as late after its time as one that
   // enters the interrupt.
   const uint32_t entry_mark = port.stopwatch();
-  uint32_t mark = entry_mark;
   const uint32_t entry = now;
+  // The fast entry's first pass is peeled off the loop: with `now`, the mark and "not waited"
+  // known constants there, its values stay in registers (in the loop -Os kept them on the stack).
+  if (HMC_STEP_LIKELY(fired) && HMC_STEP_LIKELY(step_pass(e, port, due, steps, entry, entry,
+                                                           entry_mark, entry_mark, false))) {
+    return;
+  }
   bool waited = !fired;  // a slow entry may wait for the event its compare is armed for
-  for (;;) {
-    // While the pulse is high: the due motors' DIR and next events.
-#pragma GCC unroll 3
-    for (uint8_t i = 0; i < 3; ++i) {
-      const uint8_t bit = uint8_t(1u << i);
-      if ((due & bit) == 0) continue;
-      const uint8_t flags = e.lanes[i].flags;
-      if ((flags & kSegDir) != 0) port.set_dir(i, (flags & kSegReverse) != 0);
-      advance(e, i, bit);
-    }
-    // The earliest event left and the motors due then.
-    int32_t best = 0x7FFFFFFF;
-    uint8_t next_due = 0;
-    const uint8_t armed = e.armed;
-#pragma GCC unroll 3
-    for (uint8_t i = 0; i < 3; ++i) {
-      const uint8_t bit = uint8_t(1u << i);
-      if ((armed & bit) == 0) continue;
-      const int32_t d = static_cast<int32_t>(e.next[i] - now);
-      if (d < best) {
-        best = d;
-        next_due = bit;
-      } else if (d == best) {
-        next_due |= bit;
-      }
-    }
-    const uint8_t next_steps = next_due & e.stepping;
-    const uint32_t when = now + static_cast<uint32_t>(best);
-    e.next_when = when;
-    e.next_due = next_due;
-    e.next_steps = next_steps;
-    // Time has passed since entry (the pulse so far, at least): compare what is left. The
-    // port's clock and waits count from the entry, not from `now`, which moves on with each
-    // pass: measured from `now`, a second pass found every event already due and stepped the
-    // ring empty as fast as the CPU ran.
-    const int32_t after_entry = static_cast<int32_t>(when - entry);
-    bool leave = true;
-    if (next_due != 0) {
-      if (after_entry - static_cast<int32_t>(port.elapsed(entry_mark)) >=
-          static_cast<int32_t>(Port::kCostTicks)) {
-        port.arm(when);  // its synchronisation overlaps the rest of the pulse
-        // After a wait inside, the old compare (an event this interrupt has made) may have
-        // matched meanwhile: its flag would bring the next entry in early, to raise STEP for
-        // `when` at once. The old value is past, so no match comes before the new one is live.
-        if (waited) port.ack_event();
-        e.next_armed = 1;
-      } else {
-        leave = false;
-      }
-    }
-    if (steps != 0) port.step_low(steps, mark);
-    if (leave) return;
-    // Due before the interrupt could return and come back: wait for it here.
-    if (after_entry > 0) port.wait_for(entry_mark, static_cast<uint32_t>(after_entry));
+  uint32_t mark = entry_mark;
+  if (fired) {
+    next_waited_event(e, port, entry, entry_mark, now, due, steps, mark);
     waited = true;
-    now = when;
-    due = next_due;
-    steps = next_steps;
-    if (steps != 0) port.step_high(steps);
-    mark = port.stopwatch();
+  }
+  while (!step_pass(e, port, due, steps, now, entry, entry_mark, mark, waited)) {
+    next_waited_event(e, port, entry, entry_mark, now, due, steps, mark);
+    waited = true;
   }
 }
 

@@ -35,6 +35,24 @@ T load(const T& x) {
   return *static_cast<const volatile T*>(&x);
 }
 
+// A lane's position and its move's steps (StepLane): the interrupt counts only `total` a step;
+// a fold between the reads (counted in `folds`) has them read again.
+struct LaneCounts {
+  int32_t position;  // 1/256 step
+  uint32_t fired;
+};
+LaneCounts counts(const StepLane& lane) {
+  for (;;) {
+    const uint32_t folds = load(lane.folds);
+    const uint32_t total = load(lane.total);
+    const uint32_t moved = (total - load(lane.total_at)) *
+                           static_cast<uint32_t>(static_cast<int32_t>(load(lane.position_step)));
+    const uint32_t at = static_cast<uint32_t>(load(lane.position_at));
+    const LaneCounts out{static_cast<int32_t>(at + moved), total - load(lane.fired_from)};
+    if (load(lane.folds) == folds) return out;
+  }
+}
+
 Ticks later(Ticks a, Ticks b) { return a > b ? a : b; }
 
 // Segments a push may take: a split wait, the step segment, an end marker, a DIR start.
@@ -110,7 +128,7 @@ StepStatus StepScheduler::plan_and_post(uint8_t motor, const MoveSpec* move) {
     mo.dir_known = false;  // the halt may drop a DIR change not yet made
     // The halt is taken before any event after `now`: the steps so far are all there will be.
     const StepLane& lane = engine_.lanes[index];
-    mo.pushed_position = load(lane.position);
+    mo.pushed_position = counts(lane).position;
     mo.pushed = load(lane.total);
     // (A start's anchor counts as its last step, and may still be ahead of `now`.)
     const int32_t since_step = static_cast<int32_t>(static_cast<uint32_t>(now) - load(lane.last_step));
@@ -185,7 +203,7 @@ void StepScheduler::sync(uint8_t index) {
   mo.next_slot = kNoSlot;
   mo.next_then = kNoSlot;
   mo.move_mark = false;
-  mo.pushed_position = load(lane.position);
+  mo.pushed_position = counts(lane).position;
   mo.pushed = load(lane.total);
 }
 
@@ -430,7 +448,9 @@ void StepScheduler::halt_all() {
 bool StepScheduler::set_position(uint8_t motor, int32_t position) {
   if (!is_motor(motor) || is_running(motor)) return false;
   StepLane& lane = engine_.lanes[motor - 1];
-  *static_cast<volatile int32_t*>(&lane.position) = position;
+  // At rest the interrupt neither steps nor folds this lane.
+  *static_cast<volatile uint32_t*>(&lane.total_at) = load(lane.total);
+  *static_cast<volatile int32_t*>(&lane.position_at) = position;
   motors_[motor - 1].pushed_position = position;
   return true;
 }
@@ -444,11 +464,11 @@ bool StepScheduler::is_running(uint8_t motor) const {
 }
 
 int32_t StepScheduler::position(uint8_t motor) const {
-  return is_motor(motor) ? load(engine_.lanes[motor - 1].position) : 0;
+  return is_motor(motor) ? counts(engine_.lanes[motor - 1]).position : 0;
 }
 
 uint32_t StepScheduler::steps_done(uint8_t motor) const {
-  return is_motor(motor) ? load(engine_.lanes[motor - 1].fired) : 0;
+  return is_motor(motor) ? counts(engine_.lanes[motor - 1]).fired : 0;
 }
 
 bool StepScheduler::target(uint8_t motor, int32_t& out) const {
@@ -456,7 +476,7 @@ bool StepScheduler::target(uint8_t motor, int32_t& out) const {
   const Motor& mo = motors_[motor - 1];
   const StepLane& lane = engine_.lanes[motor - 1];
   if (!is_running(motor)) {
-    out = load(lane.position);
+    out = counts(lane).position;
     return true;
   }
   if (mo.active == kNoSlot) {
