@@ -137,9 +137,10 @@ struct StepEngine {
 
 namespace step_engine_detail {
 
-inline uint8_t load8(const uint8_t& x) { return *static_cast<const volatile uint8_t*>(&x); }
-inline void store8(uint8_t& x, uint8_t v) { *static_cast<volatile uint8_t*>(&x) = v; }
-inline void fence() { __atomic_signal_fence(__ATOMIC_SEQ_CST); }
+// Forced inline: an out-of-line copy lands in flash, which the RAM code reaches through a veneer.
+HMC_STEP_INLINE uint8_t load8(const uint8_t& x) { return *static_cast<const volatile uint8_t*>(&x); }
+HMC_STEP_INLINE void store8(uint8_t& x, uint8_t v) { *static_cast<volatile uint8_t*>(&x) = v; }
+HMC_STEP_INLINE void fence() { __atomic_signal_fence(__ATOMIC_SEQ_CST); }
 // The address as a value computed at run time: the compiler then reaches the fields by small
 // offsets from it instead of from a base of its choosing (a byte load reaches 31 bytes).
 template <class T>

@@ -54,10 +54,8 @@ volatile samd21::ClockSource clock_source;
 
 }  // namespace
 
-// In RAM (.ramfunc, samd21_sections.ld): no flash wait states on the step path. Its blocks are
-// laid out by trace (stc) rather than -Os's simple order, the common case as the straight line.
-extern "C" __attribute__((section(".ramfunc.irq_tc4"), optimize("reorder-blocks-algorithm=stc")))
-void irq_tc4() {
+// In RAM (.ramfunc, samd21_sections.ld): no flash wait states on the step path.
+extern "C" __attribute__((section(".ramfunc.irq_tc4"))) void irq_tc4() {
   samd21::run_step_fast_path(step_timer, controller.step_engine());
 }
 
