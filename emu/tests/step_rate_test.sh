@@ -9,14 +9,11 @@
 # Usage: step_rate_test.sh HMC_EMU IMAGE_DIR
 # Without the images the test is skipped (77), unless CI=true.
 set -uo pipefail
-emu=$1
-image=$2/hmc-firmware.elf
-if [[ ! -f $image ]]; then
-  [[ ${CI:-} == true ]] && { echo "FAIL: no $image (build the firmware preset first)"; exit 1; }
-  echo "SKIP: no $image"; exit 77
-fi
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+emu=$(realpath "$1")
+image=$(realpath -m "$2")/hmc-firmware.elf
+# shellcheck source=SCRIPTDIR/../../cli/sim_test_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/../../cli/sim_test_lib.sh"
+require_built "$image"
 # Standard input stays open until --max-time ends the run (at its end hmc-emu would stop early).
 exec 3< <(printf 'STX#6#STM#1#1#8#0#20#30#ETX\nSTX#6#STM#2#1#8#0#20#31#ETX\nSTX#6#STM#3#1#8#0#20#32#ETX\n'
           exec sleep 120 2>/dev/null)

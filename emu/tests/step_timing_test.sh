@@ -6,12 +6,11 @@
 # Usage: step_timing_test.sh HMC_EMU IMAGE_DIR
 # Without the images the test is skipped (77), unless CI=true.
 set -uo pipefail
-emu=$1
-image=$2/hmc-firmware.elf
-if [[ ! -f $image ]]; then
-  [[ ${CI:-} == true ]] && { echo "FAIL: no $image (build the firmware preset first)"; exit 1; }
-  echo "SKIP: no $image"; exit 77
-fi
+emu=$(realpath "$1")
+image=$(realpath -m "$2")/hmc-firmware.elf
+# shellcheck source=SCRIPTDIR/../../cli/sim_test_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/../../cli/sim_test_lib.sh"
+require_built "$image"
 # Standard input stays open until --max-time ends the run (at its end hmc-emu would stop early).
 exec 3< <(printf 'STX#4#SET#1#3#0#4#ETX\nSTX#6#STM#1#1#256#0#100#102#ETX\n'; exec sleep 120 2>/dev/null)
 feeder=$!
