@@ -22,8 +22,12 @@ uint32_t isqrt(uint64_t x) {
 }
 
 uint64_t isqrt_q16(uint64_t x) {
-  uint64_t root = isqrt(x);
-  uint64_t rest = x - root * root;  // ≤ 2·root: stays below 2⁵⁰ over the 16 extra bits
+  const uint64_t root = isqrt(x);
+  return isqrt_q16_from(root, x - root * root);
+}
+
+uint64_t isqrt_q16_from(uint64_t root, uint64_t rest) {
+  // rest ≤ 2·root: stays below 2⁵⁰ over the 16 extra bits
   for (int bit = 0; bit < 16; ++bit) {
     rest <<= 2;
     root <<= 1;
@@ -148,6 +152,35 @@ void begin(const MoveSpec& spec, uint64_t m_entry, Profile& out) {
 }
 
 }  // namespace
+
+bool ramp_segment_fits(uint32_t n, uint64_t x_lo, uint32_t kappa) {
+  // Beyond 2²⁰ steps from rest every n ≤ 256 fits: n³·κ < 2²⁴·2²⁷ ≤ 83·2⁵⁰.
+  if (x_lo >= (uint64_t{1} << 20)) return true;
+  const uint64_t lhs = uint64_t{n} * n * n * kappa;
+  const uint64_t rhs = 83 * x_lo * x_lo * isqrt(x_lo);
+  return lhs <= rhs;
+}
+
+bool fit_ramp_segment(int64_t a0, int64_t x_mid, int64_t x_end, uint32_t n, RampSegment& out,
+                      int64_t& a_end) {
+  uint32_t shift = 0;  // m = n/2 = 2^shift
+  while ((uint32_t{2} << shift) < n) ++shift;
+  const int64_t to_mid = x_mid - a0;
+  const int64_t to_end = x_end - a0;
+  // s = (Δ_n − 2Δ_m)/m², rounded to the nearest (an arithmetic shift floors).
+  const int64_t m2 = int64_t{1} << (2 * shift);
+  const int64_t add = (to_end - 2 * to_mid + m2 / 2) >> (2 * shift);
+  const int64_t pairs = static_cast<int64_t>(n) * (n - 1) / 2;
+  const int64_t interval = (to_end - pairs * add + static_cast<int64_t>(n / 2)) >> (shift + 1);
+  const int64_t last = interval + static_cast<int64_t>(n - 1) * add;
+  if (add < INT32_MIN || add > INT32_MAX) return false;
+  if (interval < 0 || interval > kMaxRampSegmentInterval) return false;
+  if (last < 0 || last > kMaxRampSegmentInterval) return false;
+  out.interval = static_cast<uint32_t>(interval);
+  out.add = static_cast<int32_t>(add);
+  a_end = a0 + static_cast<int64_t>(n) * interval + pairs * add;
+  return true;
+}
 
 PlanStatus check_move(const MoveSpec& spec) {
   if (!is_microstep(spec.microstep)) return PlanStatus::kBadMicrostep;

@@ -37,9 +37,43 @@
 // and the phases' offsets carry 16 fractional bits.
 //
 // The split: planning here divides (64-bit and 128-bit long division, square roots with 16
-// fractional bits) and runs in the main loop when a move starts. The interrupt only adds K to
-// M, corrects the previous root by the change of the previous step (step_math.h), compares once
-// to round, and adds; cruise steps add I. Valid ramps need T_v ≤ 2³⁰ ticks (22.4 s): M < 2⁶⁰.
+// fractional bits) and runs in the main loop when a move starts. The main loop then works out
+// step times (step_scheduler.cpp, step_math.h: M += K, the previous root corrected, one compare
+// to round) and the interrupt plays them; cruise steps add I. Valid ramps need T_v ≤ 2³⁰ ticks
+// (22.4 s): M < 2⁶⁰.
+//
+// Ramp segments: the interrupt adds, the main loop computes a few exact points per segment.
+// Within a square-root phase the main loop does not push every step: it pushes a segment of n
+// steps (n a power of two, 2 ≤ n ≤ kMaxRampSegmentSteps) that the interrupt plays with adds
+// only. In ticks with 16 fractional bits (Q16), per lane: an accumulator A (the next event's
+// tick plus a fraction f), an interval d and an add s; per step A += d, d += s, and the step
+// rises at floor(A). Over a segment A is the quadratic A_k = A_0 + k·d + k(k−1)/2·s (k = 0..n,
+// k = 0 the step before the segment), which the main loop fits through A_0 (its exact copy of
+// the interrupt's accumulator: A never resets between ramp segments, so rounding does not
+// drift) and the ideal X_k = τ_k + ½ at k = n/2 and k = n (τ_k the ideal time, ½ so that the
+// floor rounds): with m = n/2, s = (Δ_n − 2Δ_m)/m² and d = (Δ_n − n(n−1)/2·s)/n, Δ_k = X_k − A_0
+// (shifts, m being a power of two; s rounded first and d then chosen so A_n lands on X_n).
+// The bound, every step within one tick of the ideal: |floor(A_k) − τ_k| ≤ ½ + |A_k − X_k|, and
+//   |A_k − X_k| ≤ E_interp + E_fixed, required ≤ ½.
+// E_interp, the quadratic through three points of f(k) = ±√(M₀ ± kK) (k real): at most
+//   max|f'''|·max|k(k − m)(k − n)|/6 = max|f'''|·n³·√3/216, with |f'''| = 3K³/(8M^{5/2}) largest
+//   at the segment's smallest M. With x = M/K (the position on the ramp from rest, steps):
+//   E_interp ≤ (√3/576)·n³·√K/x_min^{5/2}. The main loop takes n only if
+//     n³·κ ≤ 83·x_lo²·⌊√x_lo⌋   (κ = ⌊√K⌋ + 1 ≥ √K, x_lo = ⌊x_min⌋ ≤ x_min, 83 < 576/(4√3))
+//   so E_interp ≤ ¼. n = 2 needs no test (its nodes are its steps: E_interp = 0). A segment is
+//   therefore short at the start of a ramp from rest (x small: n ∝ x^{5/6}/K^{1/6}) and at the
+//   end of braking, and long near cruise speed (x large); x_min is the segment's first point
+//   accelerating and its last braking.
+// E_fixed: the ideal X_k carries 2⁻¹⁶ (the floor of √M·2¹⁶, exact in the main loop, plus h);
+//   s rounded to 2⁻¹⁶ shifts the interior by k(n − k)/2·2⁻¹⁷ ≤ n²/8·2⁻¹⁷, d rounded by k·2⁻¹⁷;
+//   A_0 is the previous segment's A_n (off X by ≤ n·2⁻¹⁷ + 2⁻¹⁶, weighted ≤ 1 inside the
+//   segment), the mid and end nodes by 2⁻¹⁶ (weights ≤ 1.25 together). For n ≤ 256:
+//   E_fixed ≤ 0.0625 + 0.002 + 0.0025 + 0.0001 < 0.07; with E_interp ≤ ¼ and the planning errors
+//   above (< 0.01), every step is within ½ + ¼ + 0.08 < 0.84 tick of the ideal.
+// Range: d and s are 32-bit (d unsigned Q16.16 below 2¹⁶ − 1 ticks, s signed Q16.16); a segment
+// whose intervals leave that range (slow steps, a huge first change) is not made: those steps
+// are pushed one by one with their exact times, as is each phase's first step and a replacing
+// move's first step.
 #pragma once
 
 #include <stdint.h>
@@ -117,10 +151,31 @@ PlanStatus plan_stop(const MoveSpec& spec, uint64_t m_entry, Profile& out);
 // (its acceleration and microstep). Gives 0 when `to` has no acceleration.
 PlanStatus speed_at(const Profile& profile, uint32_t step, const MoveSpec& to, uint64_t& m_out);
 
+// Ramp segments (see "Ramp segments" above).
+inline constexpr uint32_t kMaxRampSegmentSteps = 256;
+// The intervals a ramp segment may play (Q16.16 in 32 bits, and the accumulator's sum below 2³²).
+inline constexpr uint32_t kMaxRampSegmentInterval = 0xFFFEu << 16;
+
+// Whether a segment of n steps (a power of two ≥ 4) stays within ¼ tick of the quadratic it is
+// played as, x_lo = ⌊M/K⌋ at its smallest M and kappa = ⌊√K⌋ + 1.
+bool ramp_segment_fits(uint32_t n, uint64_t x_lo, uint32_t kappa);
+
+// The interrupt's interval and add for a segment of n steps (a power of two ≥ 2) from the
+// accumulator a0 through the ideal points x_mid (step n/2) and x_end (step n), all Q16 ticks
+// from one reference; a_end: the accumulator after the segment. False when out of range.
+struct RampSegment {
+  uint32_t interval;  // Q16.16, the first step's
+  int32_t add;        // Q16.16, per step
+};
+bool fit_ramp_segment(int64_t a0, int64_t x_mid, int64_t x_end, uint32_t n, RampSegment& out,
+                      int64_t& a_end);
+
 // Integer helpers (main-loop context; they divide).
 namespace ramp_math {
 uint32_t isqrt(uint64_t x);           // floor(√x)
 uint64_t isqrt_q16(uint64_t x);       // floor(√x · 2¹⁶), x < 2⁶²
+// floor(√x · 2¹⁶) from root = floor(√x) and rest = x − root² (no division).
+uint64_t isqrt_q16_from(uint64_t root, uint64_t rest);
 uint64_t mul_div(uint64_t a, uint64_t b, uint64_t c);  // floor(a·b/c); saturates at 2⁶⁴ − 1
 }  // namespace ramp_math
 

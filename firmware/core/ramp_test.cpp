@@ -6,7 +6,9 @@
 
 #include <stdint.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 #include "core/step_math.h"
@@ -178,4 +180,94 @@ TEST_CASE("a stop brakes over floor(M/K) steps") {
   REQUIRE(plan_stop(spec, k - 1, profile) == PlanStatus::kOk);
   CHECK(profile.total_steps == 0);
   CHECK(profile.phase_count == 0);
+}
+
+namespace {
+
+// A ramp segment of n steps of f(j) = ±√((x0 ± j)·K) (accelerating: +, from step x0; braking:
+// −, toward rest), fitted by fit_ramp_segment and played as the interrupt does (step_engine.h,
+// ramp_step: A += d, d += s): the largest |A_j − f(j)| in ticks over the segment; -1 when the
+// segment is out of the interrupt's range.
+long double segment_error(uint64_t k, uint64_t x0, uint32_t n, bool braking) {
+  const auto x_q16 = [&](uint64_t j) {
+    const uint64_t m = (braking ? x0 - j : x0 + j) * k;
+    const auto root = static_cast<int64_t>(rm::isqrt_q16(m));
+    return braking ? (int64_t{1} << 50) - root : root;
+  };
+  const int64_t a0 = x_q16(0);
+  hmc::fw::RampSegment seg{};
+  int64_t a_end = 0;
+  if (!hmc::fw::fit_ramp_segment(a0, x_q16(n / 2), x_q16(n), n, seg, a_end)) return -1.0L;
+  int64_t acc = a0;
+  int64_t interval = seg.interval;
+  long double worst = 0;
+  for (uint32_t j = 1; j <= n; ++j) {
+    acc += interval;
+    interval += seg.add;
+    const long double m = static_cast<long double>(braking ? x0 - j : x0 + j) * k;
+    const long double ideal = braking ? static_cast<long double>(int64_t{1} << 34) - std::sqrt(m)
+                                      : std::sqrt(m);
+    worst = std::max(worst, std::fabs(static_cast<long double>(acc) / 65536.0L - ideal));
+  }
+  REQUIRE(acc == a_end);  // the main loop's copy of the accumulator is exact
+  return worst;
+}
+
+// The longest segment ramp_segment_fits allows from step x0 (n = 2 always: no interpolation).
+uint32_t allowed_steps(uint64_t k, uint64_t x0, bool braking) {
+  const uint32_t kappa = rm::isqrt(k) + 1;
+  uint32_t n = hmc::fw::kMaxRampSegmentSteps;
+  while (n > 2 && !(braking ? x0 >= n && hmc::fw::ramp_segment_fits(n, x0 - n, kappa)
+                            : hmc::fw::ramp_segment_fits(n, x0, kappa))) {
+    n >>= 1;
+  }
+  return n;
+}
+
+uint64_t k_of(uint64_t accel) { return (2 * 48000000ull * 48000000ull + accel / 2) / accel; }
+
+}  // namespace
+
+TEST_CASE("ramp segments the bound allows stay within a quarter tick and a bit of the ideal") {
+  std::mt19937_64 rng(6);
+  int played = 0;
+  long double worst = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const uint64_t accel = 100 + rng() % 0x7FFFFF9Bu;
+    const uint64_t k = k_of(accel);
+    const uint64_t x0 = 2 + (rng() >> (rng() % 64)) % (uint64_t{1} << 24);
+    const bool braking = (i & 1) != 0;
+    if ((x0 + 600) * k >= (uint64_t{1} << 60)) continue;
+    const uint32_t n = allowed_steps(k, x0, braking);
+    if (braking && x0 < n) continue;
+    const long double error = segment_error(k, x0, n, braking);
+    if (error < 0) continue;  // intervals beyond the interrupt's range: pushed one by one
+    ++played;
+    worst = std::max(worst, error);
+    REQUIRE(error <= 0.25L + 0.07L);
+  }
+  CHECK(played > 5000);
+  std::printf("  ramp segments the bound allows (%d)           worst |A - X| %.4Lf ticks\n",
+              played, worst);
+}
+
+TEST_CASE("a ramp segment twice as long as the bound allows leaves the one-tick budget") {
+  // Where the rule stops at n (n < 256), 2n steps played as one segment stray by more than the
+  // half tick the rounding leaves: the bound is what keeps every step within one tick.
+  long double worst = 0;
+  for (const uint64_t accel : {1000ull, 20000ull, 500000ull, 2000000000ull}) {
+    const uint64_t k = k_of(accel);
+    for (uint64_t x0 = 4; x0 < (uint64_t{1} << 22); x0 += x0 / 8 + 1) {
+      for (const bool braking : {false, true}) {
+        const uint32_t n = allowed_steps(k, x0, braking);
+        // Far from rest (x0 ≥ 32n), where the third derivative barely changes over a segment and
+        // the bound is close to the error itself.
+        if (n >= hmc::fw::kMaxRampSegmentSteps || x0 < 32 * n) continue;
+        const long double error = segment_error(k, x0, 2 * n, braking);
+        worst = std::max(worst, error);
+      }
+    }
+  }
+  std::printf("  ramp segments one power of two too long      worst |A - X| %.4Lf ticks\n", worst);
+  CHECK(worst > 0.5L);
 }

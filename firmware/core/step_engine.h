@@ -1,8 +1,9 @@
 // The step interrupt: one interrupt per step, everything it needs behind one pointer.
 //
-// The main loop (StepScheduler, step_scheduler.cpp) computes every step's exact time ahead and
-// writes it into a ring per motor as segments; the interrupt only plays the rings back: per
-// event it compares, adds and counts. It never divides, never calls through a pointer, and
+// The main loop (StepScheduler, step_scheduler.cpp) works out the steps' times ahead and writes
+// them into a ring per motor as segments: runs at a constant interval, single steps, and ramp
+// segments ({interval, add, count} in Q16.16, played with adds only; ramp.h derives how long one
+// may be); the interrupt only plays the rings back: per event it compares, adds and counts. It never divides, never calls through a pointer, and
 // works on the low 32 bits of the 48 MHz clock with signed differences (an event is at most
 // kMaxSegmentTicks after the previous one; the main loop splits longer waits into events
 // without a step).
@@ -71,6 +72,9 @@ inline constexpr uint8_t kSegReverse = 4;
 inline constexpr uint8_t kSegNoStep = 8;   // the events only wait
 inline constexpr uint8_t kSegEnd = 16;     // the move ends here (no event): `end` says how
 inline constexpr uint8_t kSegMove = 32;    // a replacing move's first steps: `fired` restarts
+// A ramp segment (ramp.h, "Ramp segments"): `interval` is the first step's interval in Q16.16,
+// `add` is added to it after each step, the step rises at the accumulated time's whole tick.
+inline constexpr uint8_t kSegRamp = 64;
 
 // The longest time between two events: beyond it the main loop adds events without a step, so
 // a signed 32-bit difference always orders two pending times.
@@ -82,9 +86,12 @@ inline constexpr uint8_t kRingSize = 32;  // a power of two
 struct StepSegment {
   uint32_t interval;      // ticks after the previous event (kSegStart: the first event's time)
   uint32_t count;         // events, ≥ 1 (kEndlessEvents: endless); 0 with kSegEnd
-  int16_t position_step;  // kSegStart: position change per step (1/256 step, signed)
+  // kSegStart, kSegMove: position change per step (1/256 step, signed). kSegRamp: the
+  // accumulator's fraction after the previous step (Q0.16, its bits).
+  int16_t position_step;
   uint8_t flags;
   uint8_t end;            // kSegEnd: a MoveEnd (kNone: a move follows, the motion goes on)
+  int32_t add;            // kSegRamp: Q16.16 added to the interval after each step
 };
 
 // One motor's share of the interrupt (its next event's time and whether it has one are in
@@ -100,8 +107,12 @@ struct StepLane {
   uint8_t head;          // written by the interrupt
   uint8_t tail;          // written by the main loop
   int16_t position_step;
-  uint32_t interval;   // of the playing segment
-  uint32_t left;       // events of the playing segment from `next` on
+  uint32_t interval;   // of the playing segment (a ramp segment's: the next step's, Q16.16)
+  uint32_t left;       // events of the playing segment from `next` on (a ramp segment: 1)
+  // A ramp segment's steps after `next`, its add, and the fraction of a tick `next` carries.
+  uint32_t ramp_left;
+  int32_t add;
+  uint32_t fraction;
   uint32_t total;        // steps since power-up (wraps)
   uint32_t last_step;    // time of the last step
   uint32_t last_interval;  // between the last two steps, 0 at rest
@@ -161,6 +172,25 @@ HMC_STEP_INLINE void fold_position(StepLane& lane, int16_t position_step) {
   ++lane.folds;
 }
 
+// A ramp segment's next step after the event at `at`: adds only (ramp.h, "Ramp segments").
+HMC_STEP_INLINE void ramp_step(StepEngine& e, uint8_t i, StepLane& lane, uint32_t at) {
+  const uint32_t sum = lane.fraction + lane.interval;
+  e.next[i] = at + (sum >> 16);
+  lane.fraction = sum & 0xFFFFu;
+  lane.interval += static_cast<uint32_t>(lane.add);
+  lane.left = 1;
+}
+
+// Starts playing ramp segment `seg` after the event at `at`.
+HMC_STEP_INLINE void begin_ramp(StepEngine& e, uint8_t i, StepLane& lane, const StepSegment& seg,
+                                uint32_t at) {
+  lane.fraction = static_cast<uint16_t>(seg.position_step);
+  lane.interval = seg.interval;
+  lane.add = seg.add;
+  lane.ramp_left = seg.count - 1;
+  ramp_step(e, i, lane, at);
+}
+
 // Takes lane i's next segment, next[i] holding the last event's time. Drops what is left of a
 // halted move; passes end markers. Leaves the lane armed on its next event, or not armed.
 // Per event while ramping (a ramp step is a segment of one): in RAM on the board.
@@ -197,6 +227,14 @@ HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
       fence();
       store8(lane.head, static_cast<uint8_t>(head + 1));
       continue;
+    } else if ((flags & kSegRamp) != 0) {
+      begin_ramp(e, i, lane, seg, e.next[i]);
+      lane.flags = flags;
+      e.armed = uint8_t(e.armed | bit);
+      e.stepping = uint8_t(e.stepping | bit);
+      fence();
+      store8(lane.head, static_cast<uint8_t>(head + 1));
+      return;
     } else {
       e.next[i] += seg.interval;
       if ((flags & kSegMove) != 0) {
@@ -206,6 +244,7 @@ HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
     }
     lane.interval = seg.interval;
     lane.left = seg.count;
+    lane.ramp_left = 0;
     lane.flags = flags;
     e.armed = uint8_t(e.armed | bit);
     if ((flags & (kSegDir | kSegNoStep)) == 0) {
@@ -237,6 +276,7 @@ inline void take_requests(StepEngine& e) {
       lane.moving = 0;
       e.armed = uint8_t(e.armed & ~bit);
       lane.last_interval = 0;
+      lane.ramp_left = 0;
       ++lane.halts;
     }
     if ((e.armed & bit) == 0) load_segment(e, i);
@@ -253,17 +293,28 @@ HMC_STEP_INLINE void advance(StepEngine& e, uint8_t i, uint8_t bit) {
     lane.last_step = at;
   }
   if (HMC_STEP_UNLIKELY(lane.left != kEndlessEvents && --lane.left == 0)) {
-    // A ramp's next step (a plain stepping segment after another): taken here, without the
-    // call; anything else (a start, an end, DIR, a wait, a replacing move, an empty ring) is
+    if (lane.ramp_left != 0) {  // a ramp segment's next step
+      --lane.ramp_left;
+      ramp_step(e, i, lane, at);
+      return;
+    }
+    // The next plain or ramp segment after a plain or ramp one: taken here, without the call;
+    // anything else (a start, an end, DIR, a wait, a replacing move, an empty ring) is
     // load_segment's.
     const uint8_t head = lane.head;
-    if (lane.flags == 0 && head != load8(lane.tail)) {
+    if ((lane.flags & ~kSegRamp) == 0 && head != load8(lane.tail)) {
       fence();
       const StepSegment& seg = lane.ring[head & (kRingSize - 1)];
-      if (seg.flags == 0) {
-        e.next[i] = at + seg.interval;
-        lane.interval = seg.interval;
-        lane.left = seg.count;
+      const uint8_t flags = seg.flags;
+      if ((flags & ~kSegRamp) == 0) {
+        lane.flags = flags;
+        if (flags != 0) {
+          begin_ramp(e, i, lane, seg, at);
+        } else {
+          e.next[i] = at + seg.interval;
+          lane.interval = seg.interval;
+          lane.left = seg.count;
+        }
         fence();
         store8(lane.head, static_cast<uint8_t>(head + 1));
         return;

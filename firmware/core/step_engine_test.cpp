@@ -59,9 +59,9 @@ TEST_CASE("step interrupt: events waited for inside one entry come at their time
   // waited for inside; a pass takes 136), then steps 960 ticks apart (the interrupt leaves and comes back).
   StepEngine e{};
   hmc::fw::StepLane& lane = e.lanes[0];
-  lane.ring[0] = StepSegment{10000, 1, 16, hmc::fw::kSegStart, 0};
-  lane.ring[1] = StepSegment{150, 5, 0, 0, 0};
-  lane.ring[2] = StepSegment{960, 4, 0, 0, 0};
+  lane.ring[0] = StepSegment{10000, 1, 16, hmc::fw::kSegStart, 0, 0};
+  lane.ring[1] = StepSegment{150, 5, 0, 0, 0, 0};
+  lane.ring[2] = StepSegment{960, 4, 0, 0, 0, 0};
   lane.tail = 3;
   e.pending = 1;
   const std::vector<uint32_t> due = {10000, 10150, 10300, 10450, 10600, 10750,
@@ -91,10 +91,10 @@ TEST_CASE("step interrupt: an entry by its compare raises STEP before anything e
   // 150 ticks apart (waited for inside: the old compare's flag is cleared with the new compare).
   StepEngine e{};
   hmc::fw::StepLane& lane = e.lanes[0];
-  lane.ring[0] = StepSegment{10000, 1, 16, hmc::fw::kSegStart, 0};
-  lane.ring[1] = StepSegment{960, 3, 0, 0, 0};
-  lane.ring[2] = StepSegment{150, 2, 0, 0, 0};
-  lane.ring[3] = StepSegment{960, 2, 0, 0, 0};
+  lane.ring[0] = StepSegment{10000, 1, 16, hmc::fw::kSegStart, 0, 0};
+  lane.ring[1] = StepSegment{960, 3, 0, 0, 0, 0};
+  lane.ring[2] = StepSegment{150, 2, 0, 0, 0, 0};
+  lane.ring[3] = StepSegment{960, 2, 0, 0, 0, 0};
   lane.tail = 4;
   e.pending = 1;
 

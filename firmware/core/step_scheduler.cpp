@@ -1,5 +1,7 @@
-// StepScheduler, main-loop side: plans moves, computes each step's exact time and pushes the
-// times into the rings the step interrupt plays (step_engine.h). Everything here runs in the
+// StepScheduler, main-loop side: plans moves, works out the steps' times and pushes them into
+// the rings the step interrupt plays (step_engine.h): cruise runs, single steps at their exact
+// times, and inside a ramp segments of up to 256 steps from a few exact points each (ramp.h,
+// "Ramp segments"). Everything here runs in the
 // main loop except halt() and halt_all(), which may run in a switch interrupt.
 #include "step_math.h"
 #include "step_scheduler.h"
@@ -269,6 +271,17 @@ void StepScheduler::produce(uint8_t index) {
     }
     uint32_t most = allowed - ahead;
     if (mo.next_slot != kNoSlot && mo.switch_at - mo.planned < most) most = mo.switch_at - mo.planned;
+    const uint32_t ramped = push_ramp_segment(index, most);
+    if (ramped != 0) {
+      mo.planned += ramped;
+      mo.pushed += ramped;
+      ahead += ramped;
+      mo.pushed_position += static_cast<int32_t>(ramped) * mo.slots[mo.active].position_step;
+      mo.last_event = mo.last_rise;
+      mo.rise_ok_at = mo.last_rise + kStepHighTicks + kStepLowTicks;
+      pushed = true;
+      continue;
+    }
     Ticks first = 0;
     uint32_t count = 0;
     if (!next_run(mo, most, first, count)) {
@@ -283,14 +296,14 @@ void StepScheduler::produce(uint8_t index) {
     Ticks delta = first - mo.last_event;
     if (delta > kMaxSegmentTicks) {  // a long wait: events without a step first
       const Ticks waits = (delta - 1) / kMaxSegmentTicks;
-      push(index, StepSegment{kMaxSegmentTicks, static_cast<uint32_t>(waits), 0, kSegNoStep, 0});
+      push(index, StepSegment{kMaxSegmentTicks, static_cast<uint32_t>(waits), 0, kSegNoStep, 0, 0});
       delta -= waits * kMaxSegmentTicks;
     }
     const int16_t position_step = mo.slots[mo.active].position_step;
     const uint8_t flags = mo.move_mark ? kSegMove : uint8_t{0};
-    push(index, StepSegment{static_cast<uint32_t>(delta), 1, position_step, flags, 0});
+    push(index, StepSegment{static_cast<uint32_t>(delta), 1, position_step, flags, 0, 0});
     const uint32_t interval = count > 1 ? mo.cruise_interval : 0;
-    if (count > 1) push(index, StepSegment{interval, count - 1, position_step, 0, 0});
+    if (count > 1) push(index, StepSegment{interval, count - 1, position_step, 0, 0, 0});
     mo.move_mark = false;
     mo.planned += count;
     mo.pushed += count;
@@ -319,7 +332,7 @@ void StepScheduler::begin_from_rest(uint8_t index, uint8_t slot, Ticks now) {
     mo.dir_known = true;
     mo.dir_reverse = reverse;
   }
-  push(index, StepSegment{static_cast<uint32_t>(anchor), 1, profile.position_step, flags, 0});
+  push(index, StepSegment{static_cast<uint32_t>(anchor), 1, profile.position_step, flags, 0, 0});
   mo.last_event = anchor;
   mo.rise_ok_at = later(mo.last_rise + kStepHighTicks + kStepLowTicks, anchor + kDirGuardTicks);
   begin_profile(mo, slot, anchor);
@@ -338,6 +351,9 @@ void StepScheduler::begin_profile(Motor& mo, uint8_t slot, Ticks anchor) {
   mo.phase = kNoSlot;
   mo.kind = PhaseKind::kCruise;
   mo.left = 0;
+  mo.kappa = mo.k != 0 ? ramp_math::isqrt(mo.k) + 1 : 0;
+  mo.in_phase = false;
+  mo.after_ramp = false;
 }
 
 // The active profile has no step left: the motor is at rest at the ideal rest time. A move
@@ -351,13 +367,13 @@ void StepScheduler::finish(uint8_t index) {
   mo.next_slot = kNoSlot;  // a replacement for a step this profile never reached
   mo.next_then = kNoSlot;
   if (mo.then_slot != kNoSlot) {
-    push(index, StepSegment{0, 0, 0, kSegEnd, static_cast<uint8_t>(MoveEnd::kNone)});
+    push(index, StepSegment{0, 0, 0, kSegEnd, static_cast<uint8_t>(MoveEnd::kNone), 0});
     const uint8_t slot = mo.then_slot;
     mo.then_slot = kNoSlot;
     begin_from_rest(index, slot, rest);
     return;
   }
-  push(index, StepSegment{0, 0, 0, kSegEnd, static_cast<uint8_t>(end)});
+  push(index, StepSegment{0, 0, 0, kSegEnd, static_cast<uint8_t>(end), 0});
 }
 
 // The next run of steps of the active profile: its first step's time and how many steps (at
@@ -378,6 +394,9 @@ bool StepScheduler::next_run(Motor& mo, uint32_t most, Ticks& first, uint32_t& c
     mo.root = phase.root;
     mo.root_step = phase.root_step;
     mo.g = phase.h == 0 ? 0 : 65536u - phase.h;
+    mo.x = mo.k != 0 ? mo.m / mo.k : 0;  // once a phase: the segments' length test needs it
+    mo.in_phase = false;
+    mo.after_ramp = false;
   }
   if (mo.kind == PhaseKind::kCruise) {
     uint32_t run = most > 0 ? most : 1u;
@@ -405,12 +424,89 @@ bool StepScheduler::next_run(Motor& mo, uint32_t most, Ticks& first, uint32_t& c
   if (mo.kind == PhaseKind::kUp) {
     mo.root_step = root - mo.root;
     first = mo.base + q;
+    ++mo.x;
   } else {
     mo.root_step = mo.root - root;
     first = mo.base - q;
+    --mo.x;
   }
   mo.root = root;
+  mo.rest = rest;
+  mo.in_phase = true;
+  mo.after_ramp = false;
   return true;
+}
+
+// X = τ + ½ (ramp.h, "Ramp segments") of the active sqrt phase where its M has the root
+// ⌊√M⌋ = root and M − root² = rest, in Q16 ticks from the last step pushed.
+int64_t StepScheduler::ideal_q16(const Motor& mo, uint32_t root, int64_t rest) const {
+  const auto sqrt_q16 =
+      static_cast<int64_t>(ramp_math::isqrt_q16_from(root, static_cast<uint64_t>(rest)));
+  const int64_t base = static_cast<int64_t>(mo.base - mo.last_rise) * 65536;
+  const int64_t h = mo.g == 0 ? 0 : 65536 - static_cast<int64_t>(mo.g);
+  // Up: step at floor(base + √M + h); down: base − floor(√M + h) = floor(base + 1 − h − √M).
+  return mo.kind == PhaseKind::kUp ? base + sqrt_q16 + h : base + 65536 - h - sqrt_q16;
+}
+
+// Pushes the next steps of a sqrt phase as one ramp segment when they may be one: the longest
+// power of two the bound of ramp.h allows, within `most` and the phase. Gives its steps, 0 when
+// the next step goes alone (a phase's first, a replacing move's first, out of range).
+uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
+  Motor& mo = motors_[index];
+  if (!mo.in_phase || mo.move_mark || mo.kind == PhaseKind::kCruise) return 0;
+  uint32_t limit = most < mo.left ? most : mo.left;
+  if (limit > kMaxRampSegmentSteps) limit = kMaxRampSegmentSteps;
+  const bool up = mo.kind == PhaseKind::kUp;
+  uint32_t n = kMaxRampSegmentSteps;
+  uint32_t shift = 7;  // n/2 = 2^shift
+  while (n > limit && n > 2) {
+    n >>= 1;
+    --shift;
+  }
+  while (n > 2 && !(up ? ramp_segment_fits(n, mo.x, mo.kappa)
+                       : mo.x >= n && ramp_segment_fits(n, mo.x - n, mo.kappa))) {
+    n >>= 1;
+    --shift;
+  }
+  if (n > limit || (!up && mo.x < n)) return 0;
+  // The accumulator before the segment: the interrupt's after a ramp segment, else the last
+  // (exact) step's X.
+  int64_t a0 = mo.fraction;
+  if (!mo.after_ramp) {
+    a0 = ideal_q16(mo, mo.root, mo.rest);
+    if (a0 < 0) a0 = 0;  // the step rose at floor(X): X's 2⁻¹⁶ can only cross its tick by that
+    if (a0 > 65535) a0 = 65535;
+  }
+  const uint32_t half = n / 2;
+  const uint64_t m_mid = up ? mo.m + half * mo.k : mo.m - half * mo.k;
+  const uint64_t m_end = up ? mo.m + n * mo.k : mo.m - n * mo.k;
+  const uint32_t change = half * mo.root_step;
+  uint32_t root_mid = up ? mo.root + change : (change < mo.root ? mo.root - change : 0);
+  int64_t rest_mid = static_cast<int64_t>(m_mid - step_math::mul_u32(root_mid, root_mid));
+  step_math::settle_root(m_mid, root_mid, rest_mid);
+  const int64_t x_mid = ideal_q16(mo, root_mid, rest_mid);
+  const uint32_t change_mid = up ? root_mid - mo.root : mo.root - root_mid;
+  uint32_t root_end = up ? root_mid + change_mid : (change_mid < root_mid ? root_mid - change_mid : 0);
+  int64_t rest_end = static_cast<int64_t>(m_end - step_math::mul_u32(root_end, root_end));
+  step_math::settle_root(m_end, root_end, rest_end);
+  const int64_t x_end = ideal_q16(mo, root_end, rest_end);
+  RampSegment seg{};
+  int64_t a_end = 0;
+  if (!fit_ramp_segment(a0, x_mid, x_end, n, seg, a_end)) return 0;
+  if (mo.last_rise + static_cast<Ticks>((a0 + seg.interval) >> 16) < mo.rise_ok_at) return 0;
+  push(index, StepSegment{seg.interval, n, static_cast<int16_t>(static_cast<uint16_t>(a0)),
+                          kSegRamp, 0, seg.add});
+  mo.m = m_end;
+  mo.root_step = (up ? root_end - root_mid : root_mid - root_end) >> shift;
+  mo.root = root_end;
+  mo.x = up ? mo.x + n : mo.x - n;
+  mo.left -= n;
+  const int64_t last = static_cast<int64_t>(seg.interval) + static_cast<int64_t>(n - 1) * seg.add;
+  mo.last_delta = static_cast<uint32_t>(last >> 16);
+  mo.last_rise += static_cast<Ticks>(a_end >> 16);
+  mo.fraction = static_cast<uint32_t>(a_end & 0xFFFF);
+  mo.after_ramp = true;
+  return n;
 }
 
 // Has the interrupt take the motor's ring up (it waits, not armed).

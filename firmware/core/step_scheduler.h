@@ -124,17 +124,21 @@ class StepScheduler {
     hal::Ticks rise_ok_at;  // earliest allowed next step
     uint64_t m;
     uint64_t k;
+    uint64_t x;             // sqrt phase: ⌊m/k⌋, the position on the ramp from rest (steps)
+    int64_t rest;           // m − root², after an exact step
     uint32_t left;          // steps left in the phase
     uint32_t root;
     uint32_t root_step;
     uint32_t g;
+    uint32_t kappa;         // ⌊√k⌋ + 1
+    uint32_t fraction;      // after a ramp segment: the interrupt's fraction of a tick (Q0.16)
     uint32_t cruise_interval;
     uint32_t last_delta;    // between the last two steps pushed
     uint32_t planned;       // steps of the active move pushed
     uint32_t pushed;        // steps pushed since power-up (wraps, as StepLane::total)
     uint32_t profile_base;  // `pushed` when the active profile began
-    uint32_t switch_at;
-    uint32_t seen_halts;    // StepLane::halts when DIR was last known     // with a next_slot: the active profile's last step before it
+    uint32_t switch_at;     // with a next_slot: the active profile's last step before it
+    uint32_t seen_halts;    // StepLane::halts when DIR was last known
     int32_t pushed_position;  // the position after every step pushed
     PhaseKind kind;
     uint8_t phase;
@@ -146,6 +150,8 @@ class StepScheduler {
     bool dir_known;
     bool dir_reverse;
     bool move_mark;         // the next step segment begins a replacing move
+    bool in_phase;          // a step of the current sqrt phase is pushed: segments may follow
+    bool after_ramp;        // the last step pushed ended a ramp segment (`fraction` holds)
     Profile slots[kSlots];
   };
 
@@ -156,6 +162,8 @@ class StepScheduler {
   void begin_profile(Motor& mo, uint8_t slot, hal::Ticks anchor);
   void finish(uint8_t index);
   bool next_run(Motor& mo, uint32_t most, hal::Ticks& first, uint32_t& count);
+  uint32_t push_ramp_segment(uint8_t index, uint32_t most);
+  int64_t ideal_q16(const Motor& mo, uint32_t root, int64_t rest) const;
   void push(uint8_t index, const StepSegment& seg);
   uint8_t space(uint8_t index) const;
   uint32_t steps_ahead_allowed(const Motor& mo) const;
