@@ -2,6 +2,8 @@
 // Reals are carried as signed 64-bit ticks with 16 fractional bits ("Q16").
 #include "ramp.h"
 
+#include "step_math.h"
+
 namespace hmc::fw {
 namespace ramp_math {
 
@@ -153,12 +155,29 @@ void begin(const MoveSpec& spec, uint64_t m_entry, Profile& out) {
 
 }  // namespace
 
-bool ramp_segment_fits(uint32_t n, uint64_t x_lo, uint32_t kappa) {
+uint64_t ramp_segment_reach(uint64_t x_lo) {
   // Beyond 2²⁰ steps from rest every n ≤ 256 fits: n³·κ < 2²⁴·2²⁷ ≤ 83·2⁵⁰.
-  if (x_lo >= (uint64_t{1} << 20)) return true;
-  const uint64_t lhs = uint64_t{n} * n * n * kappa;
-  const uint64_t rhs = 83 * x_lo * x_lo * isqrt(x_lo);
-  return lhs <= rhs;
+  if (x_lo >= (uint64_t{1} << 20)) return ~uint64_t{0};
+  // 32-bit from here: x < 2²⁰, x·⌊√x⌋ < 2³⁰.
+  const auto x = static_cast<uint32_t>(x_lo);
+  uint32_t rest = x;
+  uint32_t root = 0;
+  uint32_t bit = uint32_t{1} << 20;
+  while (bit > rest) bit >>= 2;
+  while (bit != 0) {
+    if (rest >= root + bit) {
+      rest -= root + bit;
+      root = (root >> 1) + bit;
+    } else {
+      root >>= 1;
+    }
+    bit >>= 2;
+  }
+  return step_math::mul_u32(x * root, x) * 83;
+}
+
+bool ramp_segment_fits(uint32_t n, uint64_t x_lo, uint32_t kappa) {
+  return step_math::mul_u32(n * n * n, kappa) <= ramp_segment_reach(x_lo);
 }
 
 bool fit_ramp_segment(int64_t a0, int64_t x_mid, int64_t x_end, uint32_t n, RampSegment& out,

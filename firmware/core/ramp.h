@@ -156,8 +156,10 @@ inline constexpr uint32_t kMaxRampSegmentSteps = 256;
 // The intervals a ramp segment may play (Q16.16 in 32 bits, and the accumulator's sum below 2³²).
 inline constexpr uint32_t kMaxRampSegmentInterval = 0xFFFEu << 16;
 
-// Whether a segment of n steps (a power of two ≥ 4) stays within ¼ tick of the quadratic it is
-// played as, x_lo = ⌊M/K⌋ at its smallest M and kappa = ⌊√K⌋ + 1.
+// 83·x²·⌊√x⌋ for x = x_lo, saturated: a segment of n steps (a power of two ≥ 4) stays within ¼
+// tick of the quadratic it is played as when n³·κ is at most this at its smallest M
+// (x_lo = ⌊M/K⌋ there, κ = ⌊√K⌋ + 1).
+uint64_t ramp_segment_reach(uint64_t x_lo);
 bool ramp_segment_fits(uint32_t n, uint64_t x_lo, uint32_t kappa);
 
 // The interrupt's interval and add for a segment of n steps (a power of two ≥ 2) from the

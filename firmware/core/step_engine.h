@@ -298,23 +298,16 @@ HMC_STEP_INLINE void advance(StepEngine& e, uint8_t i, uint8_t bit) {
       ramp_step(e, i, lane, at);
       return;
     }
-    // The next plain or ramp segment after a plain or ramp one: taken here, without the call;
-    // anything else (a start, an end, DIR, a wait, a replacing move, an empty ring) is
-    // load_segment's.
+    // A plain segment after a plain one: taken here, without the call; anything else (a ramp
+    // segment, a start, an end, DIR, a wait, a replacing move, an empty ring) is load_segment's.
     const uint8_t head = lane.head;
-    if ((lane.flags & ~kSegRamp) == 0 && head != load8(lane.tail)) {
+    if (lane.flags == 0 && head != load8(lane.tail)) {
       fence();
       const StepSegment& seg = lane.ring[head & (kRingSize - 1)];
-      const uint8_t flags = seg.flags;
-      if ((flags & ~kSegRamp) == 0) {
-        lane.flags = flags;
-        if (flags != 0) {
-          begin_ramp(e, i, lane, seg, at);
-        } else {
-          e.next[i] = at + seg.interval;
-          lane.interval = seg.interval;
-          lane.left = seg.count;
-        }
+      if (seg.flags == 0) {
+        e.next[i] = at + seg.interval;
+        lane.interval = seg.interval;
+        lane.left = seg.count;
         fence();
         store8(lane.head, static_cast<uint8_t>(head + 1));
         return;

@@ -75,6 +75,7 @@ StepScheduler::StepScheduler(hal::StepTimer& timer, hal::StepPins& pins, Ticks h
     mo.next_slot = kNoSlot;
     mo.next_then = kNoSlot;
     mo.phase = kNoSlot;
+    mo.allowed = 2 + lead_ / kMinIntervalTicks;  // for last_delta 0 (allowed_for)
   }
 }
 
@@ -246,10 +247,15 @@ void StepScheduler::push(uint8_t index, const StepSegment& seg) {
 }
 
 // How many steps the ring may hold ahead of the interrupt: the next two (the interrupt needs
-// the one after the step it makes) and the lead's worth at the current interval.
-uint32_t StepScheduler::steps_ahead_allowed(const Motor& mo) const {
-  const uint32_t spacing = mo.last_delta > kMinIntervalTicks ? mo.last_delta : kMinIntervalTicks;
-  return 2 + lead_ / spacing;
+// the one after the step it makes) and the lead's worth at the current interval (its division
+// done again only when the interval changed).
+uint32_t StepScheduler::steps_ahead_allowed(Motor& mo) const {
+  if (mo.allowed_for != mo.last_delta) {
+    const uint32_t spacing = mo.last_delta > kMinIntervalTicks ? mo.last_delta : kMinIntervalTicks;
+    mo.allowed = 2 + lead_ / spacing;
+    mo.allowed_for = mo.last_delta;
+  }
+  return mo.allowed;
 }
 
 // Tops the ring up to the steps allowed ahead once it has fallen to half of them, so a cruise
@@ -270,8 +276,14 @@ void StepScheduler::produce(uint8_t index) {
       mo.move_mark = true;
     }
     uint32_t most = allowed - ahead;
+    // A ramp segment may reach a whole lead past the steps already pushed (the ring then holds
+    // up to 1.5 leads): one long segment per top-up instead of a few shorter ones.
+    uint32_t ramp_most = allowed - 2 > most ? allowed - 2 : most;
     if (mo.next_slot != kNoSlot && mo.switch_at - mo.planned < most) most = mo.switch_at - mo.planned;
-    const uint32_t ramped = push_ramp_segment(index, most);
+    if (mo.next_slot != kNoSlot && mo.switch_at - mo.planned < ramp_most) {
+      ramp_most = mo.switch_at - mo.planned;
+    }
+    const uint32_t ramped = push_ramp_segment(index, ramp_most);
     if (ramped != 0) {
       mo.planned += ramped;
       mo.pushed += ramped;
@@ -395,6 +407,7 @@ bool StepScheduler::next_run(Motor& mo, uint32_t most, Ticks& first, uint32_t& c
     mo.root_step = phase.root_step;
     mo.g = phase.h == 0 ? 0 : 65536u - phase.h;
     mo.x = mo.k != 0 ? mo.m / mo.k : 0;  // once a phase: the segments' length test needs it
+    mo.segment_steps = kMaxRampSegmentSteps;
     mo.in_phase = false;
     mo.after_ramp = false;
   }
@@ -457,14 +470,18 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
   uint32_t limit = most < mo.left ? most : mo.left;
   if (limit > kMaxRampSegmentSteps) limit = kMaxRampSegmentSteps;
   const bool up = mo.kind == PhaseKind::kUp;
+  // The longest power of two within the limit and twice the last segment (lengths change
+  // slowly along a ramp), then halved until the bound allows it.
+  const uint32_t start = 2 * mo.segment_steps < limit ? 2 * mo.segment_steps : limit;
   uint32_t n = kMaxRampSegmentSteps;
   uint32_t shift = 7;  // n/2 = 2^shift
-  while (n > limit && n > 2) {
+  while (n > start && n > 2) {
     n >>= 1;
     --shift;
   }
-  while (n > 2 && !(up ? ramp_segment_fits(n, mo.x, mo.kappa)
-                       : mo.x >= n && ramp_segment_fits(n, mo.x - n, mo.kappa))) {
+  const uint64_t reach = up ? ramp_segment_reach(mo.x) : 0;
+  while (n > 2 && (up ? step_math::mul_u32(n * n * n, mo.kappa) > reach
+                      : mo.x < n || !ramp_segment_fits(n, mo.x - n, mo.kappa))) {
     n >>= 1;
     --shift;
   }
@@ -506,6 +523,7 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
   mo.last_rise += static_cast<Ticks>(a_end >> 16);
   mo.fraction = static_cast<uint32_t>(a_end & 0xFFFF);
   mo.after_ramp = true;
+  mo.segment_steps = n;
   return n;
 }
 

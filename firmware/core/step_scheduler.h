@@ -132,6 +132,9 @@ class StepScheduler {
     uint32_t g;
     uint32_t kappa;         // ⌊√k⌋ + 1
     uint32_t fraction;      // after a ramp segment: the interrupt's fraction of a tick (Q0.16)
+    uint32_t segment_steps; // steps of the phase's last ramp segment (its first: 256)
+    uint32_t allowed;       // steps_ahead_allowed() for last_delta = allowed_for
+    uint32_t allowed_for;
     uint32_t cruise_interval;
     uint32_t last_delta;    // between the last two steps pushed
     uint32_t planned;       // steps of the active move pushed
@@ -166,7 +169,7 @@ class StepScheduler {
   int64_t ideal_q16(const Motor& mo, uint32_t root, int64_t rest) const;
   void push(uint8_t index, const StepSegment& seg);
   uint8_t space(uint8_t index) const;
-  uint32_t steps_ahead_allowed(const Motor& mo) const;
+  uint32_t steps_ahead_allowed(Motor& mo) const;
   void post_halt(uint8_t index, uint8_t end);
   void wake(uint8_t index);
   void kick();

@@ -313,9 +313,11 @@ TEST_CASE("ramped moves from rest: every step within one tick of the ideal") {
       {50, 48000, 1},
       {2000000000, 240, 4},
   };
+  // Lead 0: a step or two a top-up; 2 ms and 10 ms: ramp segments up to 256 steps.
+  const Ticks lead = GENERATE(Ticks{0}, StepScheduler::kDefaultHandoverLead, Ticks{480000});
   long double overall = 0;
   for (const Case& c : cases) {
-    Bench bench;
+    Bench bench(lead);
     bench.run_until(777);
     INFO("a " << c.accel << " I " << c.interval << " N " << c.steps);
     REQUIRE(bench.sched.start(1, move(false, c.steps, c.interval, c.accel)) == StepStatus::kOk);
@@ -334,13 +336,14 @@ TEST_CASE("ramped moves from rest: every step within one tick of the ideal") {
 
 TEST_CASE("random ramped moves from rest stay within one tick") {
   std::mt19937_64 rng(11);
+  const Ticks lead = GENERATE(Ticks{0}, StepScheduler::kDefaultHandoverLead, Ticks{480000});
   long double overall = 0;
   int moves = 0;
   for (int i = 0; i < 300; ++i) {
     const auto accel = static_cast<uint32_t>(200 + rng() % 3000000);
     const auto interval = static_cast<uint32_t>(240 + rng() % 100000);
     const auto steps = static_cast<uint32_t>(1 + rng() % 4000);
-    Bench bench;
+    Bench bench(lead);
     const StepStatus status = bench.sched.start(2, move(rng() % 2 == 0, steps, interval, accel));
     if (status == StepStatus::kRampTooLong) continue;
     REQUIRE(status == StepStatus::kOk);
@@ -359,7 +362,7 @@ TEST_CASE("random ramped moves from rest stay within one tick") {
 }
 
 TEST_CASE("three ramped motors at once keep their own profiles") {
-  Bench bench;
+  Bench bench(GENERATE(Ticks{0}, StepScheduler::kDefaultHandoverLead));
   REQUIRE(bench.sched.start(1, move(false, 30000, 4800, 20000)) == StepStatus::kOk);
   REQUIRE(bench.sched.start(2, move(true, 25000, 6240, 15000, 8)) == StepStatus::kOk);
   REQUIRE(bench.sched.start(3, move(false, 9000, 8496, 5000, 256)) == StepStatus::kOk);
@@ -461,6 +464,27 @@ TEST_CASE("stop with acceleration brakes at it to rest") {
                                           rises[h - 1], Ideal(a, interval, 1, kF / interval));
     CHECK(worst <= kTolerance);
   }
+  SECTION("with a lead, while accelerating (the ring holds ramp segments): as many steps again") {
+    Bench bench(StepScheduler::kDefaultHandoverLead);
+    REQUIRE(bench.sched.start(1, move(false, 0, interval, a)) == StepStatus::kOk);
+    bench.run_until(14400000);  // 0.3 s
+    const uint32_t done = bench.sched.steps_done(1);
+    REQUIRE(bench.sched.stop(1) == StepStatus::kOk);
+    bench.run_out();
+    const std::vector<Ticks> rises = bench.rises(1);
+    REQUIRE(rises.size() % 2 == 0);
+    const size_t h = rises.size() / 2;
+    CHECK(h >= done + 2);
+    const Ideal before(a, interval, 0);
+    CHECK(worst_error(std::vector<Ticks>(rises.begin(), rises.begin() + static_cast<long>(h)), 0,
+                      before) <= kTolerance);
+    const Ideal braking(a, interval, 1, before.speed(static_cast<uint32_t>(h)));
+    const long double worst = worst_error(
+        std::vector<Ticks>(rises.begin() + static_cast<long>(h), rises.end()), rises[h - 1], braking);
+    CHECK(worst <= kTolerance);
+    check_pulses(bench);
+    report("stop while accelerating, 2 ms lead", worst);
+  }
 }
 
 TEST_CASE("stop at constant rate and halt leave no further rising edge") {
@@ -476,7 +500,8 @@ TEST_CASE("stop at constant rate and halt leave no further rising edge") {
     check_pulses(bench);
   }
   SECTION("halt while ramping: every pulse already begun is whole, nothing more") {
-    Bench bench;
+    // With a lead the halt drops ramp segments and one half played.
+    Bench bench(GENERATE(Ticks{0}, StepScheduler::kDefaultHandoverLead));
     REQUIRE(bench.sched.start(1, move(false, 0, 2400, 50000)) == StepStatus::kOk);
     bench.run_until(4800000);
     const std::vector<Ticks> before = bench.rises(1);
@@ -491,6 +516,13 @@ TEST_CASE("stop at constant rate and halt leave no further rising edge") {
     CHECK(bench.sched.last_end(1) == MoveEnd::kHalted);
     CHECK(!bench.sched.is_running(1));
     CHECK(bench.sched.starved_events() == 0);
+    check_pulses(bench);
+    // Motion starts again from rest, nothing of the halted ramp left in the lane.
+    REQUIRE(bench.sched.start(1, move(false, 3000, 2400, 50000)) == StepStatus::kOk);
+    const Ticks anchor = bench.timer.clock;
+    bench.run_out();
+    CHECK(bench.rises(1, anchor).size() == 3000);
+    CHECK(worst_error(bench.rises(1, anchor), anchor, Ideal(50000, 2400, 3000)) <= kTolerance);
     check_pulses(bench);
   }
   SECTION("halt_all stops three motors at once, a rising edge due on the same tick included") {
@@ -569,6 +601,36 @@ TEST_CASE("a new move in the same direction continues from the current speed") {
     check_pulses(bench);
   }
   report("replacements, same direction (10 cases)", overall);
+  // With a lead the ring holds ramp segments: the handover comes later (at a step the test does
+  // not know ahead), and the move still ends exactly n2 steps after it, every step on the ideal.
+  long double with_lead = 0;
+  for (const Case& c : cases) {
+    if (c.n2 == 0 || c.n2 < 1000) continue;
+    INFO(c.name << ", 2 ms lead");
+    Bench bench(StepScheduler::kDefaultHandoverLead);
+    REQUIRE(bench.sched.start(1, move(false, 0, c.i1, c.a1)) == StepStatus::kOk);
+    bench.run_until(c.at);
+    const uint32_t done = bench.sched.steps_done(1);
+    REQUIRE(bench.sched.start(1, move(false, c.n2, c.i2, c.a2, c.micro2)) == StepStatus::kOk);
+    bench.run_out();
+    const std::vector<Ticks> rises = bench.rises(1);
+    REQUIRE(rises.size() > c.n2 + done);
+    const size_t h = rises.size() - c.n2;
+    CHECK(h >= done + 2);
+    CHECK(h <= done + 2 + 2 * (StepScheduler::kDefaultHandoverLead / 240));
+    const Ideal first(c.a1, c.i1, 0);
+    CHECK(worst_error(std::vector<Ticks>(rises.begin(), rises.begin() + static_cast<long>(h)), 0,
+                      first) <= kTolerance);
+    const Ideal second(c.a2, c.i2, c.n2, first.speed(static_cast<uint32_t>(h)) * c.micro2);
+    REQUIRE(second.steps() == c.n2);
+    const long double worst =
+        worst_error(std::vector<Ticks>(rises.begin() + static_cast<long>(h), rises.end()),
+                    rises[h - 1], second);
+    CHECK(worst <= kTolerance);
+    with_lead = std::max(with_lead, worst);
+    check_pulses(bench);
+  }
+  report("replacements, same direction, 2 ms lead", with_lead);
 }
 
 TEST_CASE("a constant-rate move replaced keeps stepping from its last step") {
