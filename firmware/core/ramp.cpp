@@ -42,6 +42,27 @@ uint64_t isqrt_q16_from(uint64_t root, uint64_t rest) {
   return root;
 }
 
+uint32_t sqrt_fraction_q16(uint32_t root, uint32_t rest) {
+  if (root < 1024) {
+    return static_cast<uint32_t>(isqrt_q16_from(root, rest) - (uint64_t{root} << 16));
+  }
+  // √x − root = rest/(root + √x), root + √x within ½ of 2·root + ½: 16 quotient bits of
+  // 2·rest/(4·root + 1), the remainder kept below the divisor (no 33rd bit).
+  const uint32_t divisor = 4 * root + 1;
+  uint32_t rem = 2 * rest;  // ≤ 4·root < divisor
+  uint32_t quotient = 0;
+  for (int bit = 0; bit < 16; ++bit) {
+    quotient <<= 1;
+    if (rem >= divisor - rem) {
+      rem -= divisor - rem;
+      quotient |= 1;
+    } else {
+      rem <<= 1;
+    }
+  }
+  return quotient;
+}
+
 uint64_t mul_div(uint64_t a, uint64_t b, uint64_t c) {
   constexpr uint64_t kLow = 0xFFFFFFFFu;
   const uint64_t ll = (a & kLow) * (b & kLow);
@@ -189,15 +210,18 @@ bool fit_ramp_segment(int64_t a0, int64_t x_mid, int64_t x_end, uint32_t n, Ramp
   // s = (Δ_n − 2Δ_m)/m², rounded to the nearest (an arithmetic shift floors).
   const int64_t m2 = int64_t{1} << (2 * shift);
   const int64_t add = (to_end - 2 * to_mid + m2 / 2) >> (2 * shift);
-  const int64_t pairs = static_cast<int64_t>(n) * (n - 1) / 2;
-  const int64_t interval = (to_end - pairs * add + static_cast<int64_t>(n / 2)) >> (shift + 1);
-  const int64_t last = interval + static_cast<int64_t>(n - 1) * add;
+  // n(n − 1)/2·s = ((s·n) − s)·m, products by powers of two as shifts (a 64-bit multiply is a
+  // library call on the M0+).
+  using step_math::shl;
+  const int64_t pairs_add = shl(shl(add, shift + 1) - add, shift);
+  const int64_t interval = (to_end - pairs_add + static_cast<int64_t>(n / 2)) >> (shift + 1);
+  const int64_t last = interval + shl(add, shift + 1) - add;
   if (add < INT32_MIN || add > INT32_MAX) return false;
   if (interval < 0 || interval > kMaxRampSegmentInterval) return false;
   if (last < 0 || last > kMaxRampSegmentInterval) return false;
   out.interval = static_cast<uint32_t>(interval);
   out.add = static_cast<int32_t>(add);
-  a_end = a0 + static_cast<int64_t>(n) * interval + pairs * add;
+  a_end = a0 + shl(interval, shift + 1) + pairs_add;
   return true;
 }
 

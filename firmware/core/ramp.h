@@ -178,6 +178,10 @@ uint32_t isqrt(uint64_t x);           // floor(√x)
 uint64_t isqrt_q16(uint64_t x);       // floor(√x · 2¹⁶), x < 2⁶²
 // floor(√x · 2¹⁶) from root = floor(√x) and rest = x − root² (no division).
 uint64_t isqrt_q16_from(uint64_t root, uint64_t rest);
+// The fraction √x − root in 2⁻¹⁶, floored (from root = floor(√x) < 2³⁰ and rest = x − root²):
+// exact for root < 1024, else rest/(2·root + ½) (a 32-bit long division), within 1/(4·root)
+// ≤ 2⁻¹² of the exact fraction before the floor.
+uint32_t sqrt_fraction_q16(uint32_t root, uint32_t rest);
 uint64_t mul_div(uint64_t a, uint64_t b, uint64_t c);  // floor(a·b/c); saturates at 2⁶⁴ − 1
 }  // namespace ramp_math
 

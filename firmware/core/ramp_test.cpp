@@ -114,6 +114,22 @@ TEST_CASE("isqrt, isqrt_q16 and mul_div") {
   }
 }
 
+TEST_CASE("sqrt_fraction_q16 is within 2^-16 + 1/(4 root) of the fraction, exact below 1024") {
+  std::mt19937_64 rng(7);
+  for (int i = 0; i < 200000; ++i) {
+    const uint64_t m = rng() >> (4 + rng() % 60);  // below 2^60
+    const uint32_t root = reference_isqrt(m);
+    const auto rest = static_cast<uint32_t>(m - uint64_t{root} * root);
+    const uint32_t fraction = rm::sqrt_fraction_q16(root, rest);
+    if (root < 1024) {
+      REQUIRE(fraction == rm::isqrt_q16(m) - (uint64_t{root} << 16));
+      continue;
+    }
+    const long double exact = (std::sqrt(static_cast<long double>(m)) - root) * 65536.0L;
+    REQUIRE(std::fabs(static_cast<long double>(fraction) - exact) <= 1.0L + 65536.0L / (4.0L * root));
+  }
+}
+
 TEST_CASE("plans split every move into phases that add up to it") {
   std::mt19937_64 rng(5);
   int checked = 0;

@@ -71,6 +71,11 @@ inline void settle_root(uint64_t m, uint32_t& root, int64_t& rest) {
   }
 }
 
+// v·2^s for either sign (a left shift of a negative value is undefined before C++20), s < 64.
+inline int64_t shl(int64_t v, uint32_t s) {
+  return static_cast<int64_t>(static_cast<uint64_t>(v) << s);
+}
+
 // Whether √m + h reaches root + 1, given root = floor(√m), rest = m − root² and
 // g = 1 − h in units of 2⁻¹⁶ (1..65535): √m ≥ root + g ⇔ rest ≥ 2·root·g + g². Exact in 64 bits
 // for root < 2³⁰.

@@ -453,12 +453,20 @@ bool StepScheduler::next_run(Motor& mo, uint32_t most, Ticks& first, uint32_t& c
 // X = τ + ½ (ramp.h, "Ramp segments") of the active sqrt phase where its M has the root
 // ⌊√M⌋ = root and M − root² = rest, in Q16 ticks from the last step pushed.
 int64_t StepScheduler::ideal_q16(const Motor& mo, uint32_t root, int64_t rest) const {
-  const auto sqrt_q16 =
-      static_cast<int64_t>(ramp_math::isqrt_q16_from(root, static_cast<uint64_t>(rest)));
+  const int64_t sqrt_q16 = (static_cast<int64_t>(root) << 16) +
+                           ramp_math::sqrt_fraction_q16(root, static_cast<uint32_t>(rest));
   const int64_t base = static_cast<int64_t>(mo.base - mo.last_rise) * 65536;
   const int64_t h = mo.g == 0 ? 0 : 65536 - static_cast<int64_t>(mo.g);
   // Up: step at floor(base + √M + h); down: base − floor(√M + h) = floor(base + 1 − h − √M).
   return mo.kind == PhaseKind::kUp ? base + sqrt_q16 + h : base + 65536 - h - sqrt_q16;
+}
+
+// ⌊√M⌋ of the active sqrt phase where its X (ideal_q16) would be x_q16, clamped to [0, 2³¹).
+uint32_t StepScheduler::root_guess(const Motor& mo, int64_t x_q16) const {
+  const int64_t base = static_cast<int64_t>(mo.base - mo.last_rise) * 65536;
+  const int64_t h = mo.g == 0 ? 0 : 65536 - static_cast<int64_t>(mo.g);
+  const int64_t root = (mo.kind == PhaseKind::kUp ? x_q16 - base - h : base + 65536 - h - x_q16) >> 16;
+  return root < 0 ? 0 : (root > 0x7FFFFFFF ? 0x7FFFFFFFu : static_cast<uint32_t>(root));
 }
 
 // Pushes the next steps of a sqrt phase as one ramp segment when they may be one: the longest
@@ -473,19 +481,21 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
   // The longest power of two within the limit and twice the last segment (lengths change
   // slowly along a ramp), then halved until the bound allows it.
   const uint32_t start = 2 * mo.segment_steps < limit ? 2 * mo.segment_steps : limit;
+  // Below 4 steps single exact steps cost less than a segment's two points.
   uint32_t n = kMaxRampSegmentSteps;
   uint32_t shift = 7;  // n/2 = 2^shift
-  while (n > start && n > 2) {
+  while (n > start && n > 4) {
     n >>= 1;
     --shift;
   }
+  if (n > limit) return 0;
   const uint64_t reach = up ? ramp_segment_reach(mo.x) : 0;
-  while (n > 2 && (up ? step_math::mul_u32(n * n * n, mo.kappa) > reach
-                      : mo.x < n || !ramp_segment_fits(n, mo.x - n, mo.kappa))) {
+  while (up ? step_math::mul_u32(n * n * n, mo.kappa) > reach
+            : mo.x < n || !ramp_segment_fits(n, mo.x - n, mo.kappa)) {
+    if (n == 4) return 0;
     n >>= 1;
     --shift;
   }
-  if (n > limit || (!up && mo.x < n)) return 0;
   // The accumulator before the segment: the interrupt's after a ramp segment, else the last
   // (exact) step's X.
   int64_t a0 = mo.fraction;
@@ -495,15 +505,29 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
     if (a0 > 65535) a0 = 65535;
   }
   const uint32_t half = n / 2;
-  const uint64_t m_mid = up ? mo.m + half * mo.k : mo.m - half * mo.k;
-  const uint64_t m_end = up ? mo.m + n * mo.k : mo.m - n * mo.k;
-  const uint32_t change = half * mo.root_step;
-  uint32_t root_mid = up ? mo.root + change : (change < mo.root ? mo.root - change : 0);
+  // Products by powers of two as shifts (a 64-bit multiply is a library call on the M0+).
+  const uint64_t k_half = mo.k << shift;
+  const uint64_t m_mid = up ? mo.m + k_half : mo.m - k_half;
+  const uint64_t m_end = up ? mo.m + 2 * k_half : mo.m - 2 * k_half;
+  // First guesses of the roots: after a segment, its quadratic carried on (within a few ticks
+  // of the ideal); after an exact step, its root's change times the steps.
+  uint32_t root_mid = 0;
+  uint32_t root_end = 0;
+  if (mo.after_ramp) {
+    // a0 + k·d + k(k − 1)/2·s at k = half and n.
+    const int64_t d = mo.next_interval;
+    const int64_t s = mo.next_add;
+    using step_math::shl;
+    root_mid = root_guess(mo, a0 + shl(d, shift) + shl(shl(s, shift) - s, shift) / 2);
+    root_end = root_guess(mo, a0 + shl(d, shift + 1) + shl(shl(s, shift + 1) - s, shift));
+  } else {
+    const uint32_t change = half * mo.root_step;
+    root_mid = up ? mo.root + change : (change < mo.root ? mo.root - change : 0);
+    root_end = up ? root_mid + change : (2 * change < mo.root ? mo.root - 2 * change : 0);
+  }
   int64_t rest_mid = static_cast<int64_t>(m_mid - step_math::mul_u32(root_mid, root_mid));
   step_math::settle_root(m_mid, root_mid, rest_mid);
   const int64_t x_mid = ideal_q16(mo, root_mid, rest_mid);
-  const uint32_t change_mid = up ? root_mid - mo.root : mo.root - root_mid;
-  uint32_t root_end = up ? root_mid + change_mid : (change_mid < root_mid ? root_mid - change_mid : 0);
   int64_t rest_end = static_cast<int64_t>(m_end - step_math::mul_u32(root_end, root_end));
   step_math::settle_root(m_end, root_end, rest_end);
   const int64_t x_end = ideal_q16(mo, root_end, rest_end);
@@ -522,6 +546,8 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
   mo.last_delta = static_cast<uint32_t>(last >> 16);
   mo.last_rise += static_cast<Ticks>(a_end >> 16);
   mo.fraction = static_cast<uint32_t>(a_end & 0xFFFF);
+  mo.next_interval = last + seg.add;
+  mo.next_add = seg.add;
   mo.after_ramp = true;
   mo.segment_steps = n;
   return n;

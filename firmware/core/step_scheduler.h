@@ -132,6 +132,8 @@ class StepScheduler {
     uint32_t g;
     uint32_t kappa;         // ⌊√k⌋ + 1
     uint32_t fraction;      // after a ramp segment: the interrupt's fraction of a tick (Q0.16)
+    int64_t next_interval;  // after a ramp segment: its interval and add carried on (Q16)
+    int64_t next_add;
     uint32_t segment_steps; // steps of the phase's last ramp segment (its first: 256)
     uint32_t allowed;       // steps_ahead_allowed() for last_delta = allowed_for
     uint32_t allowed_for;
@@ -167,6 +169,7 @@ class StepScheduler {
   bool next_run(Motor& mo, uint32_t most, hal::Ticks& first, uint32_t& count);
   uint32_t push_ramp_segment(uint8_t index, uint32_t most);
   int64_t ideal_q16(const Motor& mo, uint32_t root, int64_t rest) const;
+  uint32_t root_guess(const Motor& mo, int64_t x_q16) const;
   void push(uint8_t index, const StepSegment& seg);
   uint8_t space(uint8_t index) const;
   uint32_t steps_ahead_allowed(Motor& mo) const;
