@@ -64,16 +64,19 @@
 //   therefore short at the start of a ramp from rest (x small: n ∝ x^{5/6}/K^{1/6}) and at the
 //   end of braking, and long near cruise speed (x large); x_min is the segment's first point
 //   accelerating and its last braking.
-// E_fixed: the ideal X_k carries 2⁻¹⁶ (the floor of √M·2¹⁶, exact in the main loop, plus h);
-//   s rounded to 2⁻¹⁶ shifts the interior by k(n − k)/2·2⁻¹⁷ ≤ n²/8·2⁻¹⁷, d rounded by k·2⁻¹⁷;
-//   A_0 is the previous segment's A_n (off X by ≤ n·2⁻¹⁷ + 2⁻¹⁶, weighted ≤ 1 inside the
-//   segment), the mid and end nodes by 2⁻¹⁶ (weights ≤ 1.25 together). For n ≤ 256:
-//   E_fixed ≤ 0.0625 + 0.002 + 0.0025 + 0.0001 < 0.07; with E_interp ≤ ¼ and the planning errors
-//   above (< 0.01), every step is within ½ + ¼ + 0.08 < 0.84 tick of the ideal.
+// E_fixed: the main loop's X_k is within e = 2⁻¹⁶ + 2⁻¹² of X_k (√M's fraction by
+//   ramp_math::sqrt_fraction_q16, h exact); s rounded to 2⁻¹⁶ shifts the interior by
+//   k(n − k)/2·2⁻¹⁷ ≤ n²/8·2⁻¹⁷, d rounded by k·2⁻¹⁷; A_0 is the previous segment's A_n (off X by
+//   ≤ n·2⁻¹⁷ + e, weighted ≤ 1 inside the segment), or the last exact step's X (e), the mid and
+//   end points off by e (weights ≤ 1.25 together). For n ≤ 256: E_fixed ≤ 0.0625 + 0.002 +
+//   0.0025 + 0.0006 < 0.07; with E_interp ≤ ¼ and the planning errors above (< 0.01), every step
+//   is within ½ + ¼ + 0.08 < 0.84 tick of the ideal (the tests measure ≤ 0.77).
 // Range: d and s are 32-bit (d unsigned Q16.16 below 2¹⁶ − 1 ticks, s signed Q16.16); a segment
 // whose intervals leave that range (slow steps, a huge first change) is not made: those steps
 // are pushed one by one with their exact times, as is each phase's first step and a replacing
-// move's first step.
+// move's first step. A segment also ends at its phase's end and within the ring's reach (the
+// handover lead's worth of steps past what is pushed, step_scheduler.cpp), so n is the largest
+// power of two under the bound, the phase and the lead.
 #pragma once
 
 #include <stdint.h>

@@ -408,6 +408,7 @@ bool StepScheduler::next_run(Motor& mo, uint32_t most, Ticks& first, uint32_t& c
     mo.g = phase.h == 0 ? 0 : 65536u - phase.h;
     mo.x = mo.k != 0 ? mo.m / mo.k : 0;  // once a phase: the segments' length test needs it
     mo.segment_steps = kMaxRampSegmentSteps;
+    mo.fits_up_to = 0;
     mo.in_phase = false;
     mo.after_ramp = false;
   }
@@ -481,18 +482,30 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
   // The longest power of two within the limit and twice the last segment (lengths change
   // slowly along a ramp), then halved until the bound allows it.
   const uint32_t start = 2 * mo.segment_steps < limit ? 2 * mo.segment_steps : limit;
-  // Below 4 steps single exact steps cost less than a segment's two points.
   uint32_t n = kMaxRampSegmentSteps;
   uint32_t shift = 7;  // n/2 = 2^shift
-  while (n > start && n > 4) {
+  while (n > start && n > 2) {
     n >>= 1;
     --shift;
   }
   if (n > limit) return 0;
-  const uint64_t reach = up ? ramp_segment_reach(mo.x) : 0;
-  while (up ? step_math::mul_u32(n * n * n, mo.kappa) > reach
-            : mo.x < n || !ramp_segment_fits(n, mo.x - n, mo.kappa)) {
-    if (n == 4) return 0;
+  // Accelerating, x only grows: a length the bound allowed earlier in the phase still fits.
+  uint64_t reach = 0;
+  for (;;) {
+    if (n == 2) {  // no interpolation: its points are its steps
+      if (!up && mo.x < 2) return 0;
+      break;
+    }
+    if (up) {
+      if (n <= mo.fits_up_to) break;
+      if (reach == 0) reach = ramp_segment_reach(mo.x);
+      if (step_math::mul_u32(n * n * n, mo.kappa) <= reach) {
+        mo.fits_up_to = n;
+        break;
+      }
+    } else if (mo.x >= n && ramp_segment_fits(n, mo.x - n, mo.kappa)) {
+      break;
+    }
     n >>= 1;
     --shift;
   }
