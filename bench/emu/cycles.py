@@ -9,7 +9,12 @@ states and the timer's synchronisation included, over the STEP rising edges the 
 counted. Beside them: bench/qemu's instruction counts of the same engine (the core alone, a fake
 port), Klipper's cycles per step on the SAMD21, and issue 18's targets.
 
-Usage: cycles.py HMC_EMU IMAGE [QEMU_BENCH_OUTPUT]
+With a fourth argument, bench/qemu's output under hmc-emu-bench --cycles (the same program in the
+cycle model): the main loop's StepScheduler::fill per step while ramping and its share of the CPU,
+beside the figures of the engine that computed every ramp step (main f26254f, measured the same
+way: issue 18's "today").
+
+Usage: cycles.py HMC_EMU IMAGE [QEMU_BENCH_OUTPUT [FILL_CYCLES_OUTPUT]]
 """
 import re
 import subprocess
@@ -81,8 +86,35 @@ def qemu_rows(path):
     return rows
 
 
+def fill_rows(path):
+    """bench/qemu's scenario rows: fill per step (last cell); the share rows: fill per 1 000 ticks."""
+    fill, share = {}, {}
+    if path:
+        for line in open(path):
+            cells = [c.strip() for c in line.strip().strip("|").split("|")]
+            if len(cells) == 7 and cells[1].isdigit():
+                fill[cells[0]] = float(cells[6])
+            elif len(cells) == 3 and cells[1].isdigit():
+                share[cells[0]] = float(cells[2])
+    return fill, share
+
+
 EMU, IMAGE = sys.argv[1], sys.argv[2]
 qemu = qemu_rows(sys.argv[3] if len(sys.argv) > 3 else None)
+FILL, SHARE = fill_rows(sys.argv[4] if len(sys.argv) > 4 else None)
+
+# fill() per step in cycles (hmc-emu-bench --cycles) with one segment per ramp step: main f26254f.
+FILL_BEFORE = {
+    "1 motor, ramping": 1688.3,
+    "3 motors, ramping": 1838.3,
+    "3 motors toward 20 us, ramping": 1299.7,
+    "3 motors to 20 us and back, ramping, fill every 250 us": 376.5,
+    "3 motors to 20 us and back at 200 000 steps/s^2, fill every 250 us": 791.4,
+}
+SHARE_BEFORE = {
+    "3 motors to 20 us and back, ramping, fill every 250 us": 830.5,
+    "3 motors to 20 us and back at 200 000 steps/s^2, fill every 250 us": 1236.5,
+}
 
 # (case, moves, acceleration, bench/qemu's row, Klipper's cycles per step, issue 18's target)
 CASES = [
@@ -115,3 +147,26 @@ for name, r, klipper, target in results:
     print("summary: | firmware step interrupt on the real image (hmc-emu cycles), %s | %.0f cycles per "
           "step | Klipper on the SAMD21: %d cycles per step | %.1fx | <= %d (issue 18) |" % (
               name, r["per_step"], klipper, r["per_step"] / klipper, target))
+
+if FILL:
+    print()
+    print("The main loop's StepScheduler::fill while ramping (bench/qemu's program in hmc-emu's cycle "
+          "model; its fill() after every interrupt, or every 250 us where the case says so), cycles "
+          "per step, beside the engine that computed every ramp step (main f26254f):")
+    print()
+    print("| case | fill per step, ramp segments | fill per step, one segment a step | ratio |")
+    print("|---|---|---|---|")
+    for name, before in FILL_BEFORE.items():
+        if name in FILL:
+            print("| %s | %.1f | %.1f | %.2fx |" % (name, FILL[name], before, before / FILL[name]))
+    print()
+    print("| case | main loop's share of the CPU (fill), ramp segments | one segment a step |")
+    print("|---|---|---|")
+    for name, before in SHARE_BEFORE.items():
+        if name in SHARE:
+            print("| %s | %.1f %% | %.1f %% |" % (name, SHARE[name] / 10, before / 10))
+    for name, before in FILL_BEFORE.items():
+        if name in FILL:
+            print("summary: | firmware main loop fill() per ramping step (hmc-emu cycles), %s | %.0f cycles "
+                  "per step | one segment a step (main f26254f): %.0f | %.2fx | ramp segments "
+                  "{interval, add, count} (issue 18) |" % (name, FILL[name], before, before / FILL[name]))
