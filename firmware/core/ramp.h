@@ -31,8 +31,9 @@
 //     floor(M_u/K) steps out, past the target (as a stop does).
 //   N = 0 (run until stopped) has no braking phase. a = 0 has no ramps: t_j = t₀ + j·I.
 //
-// Each scheduled step is the ideal time rounded to the nearest tick, so within half a tick of
-// it, plus two errors kept far below a tick: K, M_v and the entry M are integers (K = 2F²/a
+// Each step pushed alone is the ideal time rounded to the nearest tick, so within half a tick of
+// it (a step of a ramp segment within one tick: "Ramp segments" below), plus two errors kept far
+// below a tick: K, M_v and the entry M are integers (K = 2F²/a
 // rounded: after j steps M is off by j/2 at most, which moves √M by √(j/K)/4 < 1/(8·I) tick),
 // and the phases' offsets carry 16 fractional bits.
 //

@@ -126,3 +126,100 @@ TEST_CASE("step interrupt: an entry by its compare raises STEP before anything e
   CHECK(waited_and_cleared);
   CHECK(lane.total == 8);
 }
+
+namespace {
+
+// Steps motor 1 through the ring from the main loop's kick at `start`, each later entry by the
+// compare the last one armed: the armed compares (the events' planned times) in order.
+std::vector<uint32_t> play(StepEngine& e, ClockPort& port, uint32_t start, int entries) {
+  std::vector<uint32_t> armed;
+  uint32_t now = start;
+  for (int n = 0; n < entries; ++n) {
+    port.clock = now;
+    port.fired = n > 0;
+    port.armed = 0;
+    hmc::fw::run_step_interrupt(e, port);
+    if (port.armed == 0) break;
+    armed.push_back(port.armed);
+    now = port.armed;
+  }
+  return armed;
+}
+
+}  // namespace
+
+TEST_CASE("step interrupt: ramp segments step on the accumulator's whole ticks, with adds only") {
+  // From 10 000 (fraction ½): 4 steps from 1 000.75 ticks falling by 10.25 a step, then 3 more
+  // continuing (the main loop's copy of the fraction), then a plain run of 960.
+  constexpr int64_t kOne = 65536;
+  const int64_t d0 = 1000 * kOne + 3 * kOne / 4;
+  const int64_t s = -(10 * kOne + kOne / 4);
+  int64_t acc = 10000 * kOne + kOne / 2;
+  int64_t d = d0;
+  std::vector<uint32_t> due;
+  for (int j = 0; j < 7; ++j) {
+    acc += d;
+    d += s;
+    due.push_back(static_cast<uint32_t>(acc / kOne));
+  }
+  const auto fraction_after_4 = static_cast<uint16_t>([&] {
+    int64_t a = kOne / 2;
+    for (int j = 0; j < 4; ++j) a += d0 + j * s;
+    return a % kOne;
+  }());
+  for (int j = 1; j <= 3; ++j) due.push_back(due[6] + 960 * static_cast<uint32_t>(j));
+
+  StepEngine e{};
+  hmc::fw::StepLane& lane = e.lanes[0];
+  lane.ring[0] = StepSegment{10000, 1, 16, hmc::fw::kSegStart | hmc::fw::kSegNoStep, 0, 0};
+  lane.ring[1] = StepSegment{static_cast<uint32_t>(d0), 4, static_cast<int16_t>(kOne / 2),
+                             hmc::fw::kSegRamp, 0, static_cast<int32_t>(s)};
+  lane.ring[2] = StepSegment{static_cast<uint32_t>(d0 + 4 * s), 3,
+                             static_cast<int16_t>(fraction_after_4), hmc::fw::kSegRamp, 0,
+                             static_cast<int32_t>(s)};
+  lane.ring[3] = StepSegment{960, 3, 0, 0, 0, 0};
+  lane.tail = 4;
+  e.pending = 1;
+  ClockPort port;
+  const std::vector<uint32_t> armed = play(e, port, 10000, 20);
+  REQUIRE(armed.size() >= due.size());
+  for (size_t i = 0; i < due.size(); ++i) {
+    INFO("step " << i);
+    CHECK(armed[i] == due[i]);  // the start's event (no step) at 10 000 armed nothing
+  }
+  CHECK(lane.total == due.size());
+  CHECK(lane.ramp_left == 0);
+}
+
+TEST_CASE("step interrupt: a halt inside a ramp segment leaves nothing of it") {
+  StepEngine e{};
+  hmc::fw::StepLane& lane = e.lanes[0];
+  lane.ring[0] = StepSegment{10000, 1, 16, hmc::fw::kSegStart | hmc::fw::kSegNoStep, 0, 0};
+  lane.ring[1] = StepSegment{1000u << 16, 64, 0, hmc::fw::kSegRamp, 0, -(1 << 12)};
+  lane.tail = 2;
+  e.pending = 1;
+  ClockPort port;
+  play(e, port, 10000, 4);  // the start and three steps of the segment
+  const uint32_t steps = lane.total;
+  REQUIRE(steps == 3);
+  REQUIRE(lane.ramp_left == 60);
+  // The main loop halts (as StepScheduler::post_halt does), then starts a plain move.
+  lane.halt_upto = lane.tail;
+  lane.halt_request = 0x80 | 3;
+  e.pending = 1;
+  port.clock += 10;
+  port.fired = false;
+  hmc::fw::run_step_interrupt(e, port);
+  CHECK(port.rises.size() == steps);
+  CHECK(lane.ramp_left == 0);
+  CHECK(lane.moving == 0);
+  lane.ring[2] = StepSegment{50000, 1, 16, hmc::fw::kSegStart | hmc::fw::kSegNoStep, 0, 0};
+  lane.ring[3] = StepSegment{700, 2, 0, 0, 0, 0};
+  lane.tail = 4;
+  e.pending = 1;
+  const std::vector<uint32_t> armed = play(e, port, 50000, 6);
+  REQUIRE(armed.size() >= 2);
+  CHECK(armed[0] == 50700);
+  CHECK(armed[1] == 51400);
+  CHECK(lane.total == steps + 2);
+}

@@ -1,10 +1,11 @@
-// Per-step integer math of the step interrupt: a widening multiply, the exact integer square
-// root carried from one step to the next, and the rounding test of a ramp step's time.
+// The main loop's integer math of ramp step times (step_scheduler.cpp): a widening multiply,
+// the exact integer square root carried from one point to the next, the rounding test of a
+// ramp step's time, and a left shift of a signed value.
 //
-// Everything here runs once per ramp step on a Cortex-M0+, which has a single-cycle 32×32→32
-// multiply and no divider: no division, no 64-bit multiply helper, no loop whose length grows
-// with the numbers except the correction in settle_root, which takes two tests per bit of the
-// prediction's error (none or one bit at speed; see ramp.h).
+// It runs per ramp step pushed alone and twice per ramp segment on a Cortex-M0+, which has a
+// single-cycle 32×32→32 multiply and no divider: no division, no 64-bit multiply helper, no
+// loop whose length grows with the numbers except the correction in settle_root, which takes
+// two tests per bit of the guess's error (none or a few bits; see ramp.h).
 #pragma once
 
 #include <stdint.h>
