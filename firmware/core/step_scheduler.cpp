@@ -476,6 +476,8 @@ uint32_t StepScheduler::root_guess(const Motor& mo, int64_t x_q16) const {
 uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
   Motor& mo = motors_[index];
   if (!mo.in_phase || mo.move_mark || mo.kind == PhaseKind::kCruise) return 0;
+  // Slower steps than a segment's interval may hold go alone (not worth two points to find out).
+  if (mo.last_delta >= (kMaxRampSegmentInterval >> 16)) return 0;
   uint32_t limit = most < mo.left ? most : mo.left;
   if (limit > kMaxRampSegmentSteps) limit = kMaxRampSegmentSteps;
   const bool up = mo.kind == PhaseKind::kUp;
