@@ -150,9 +150,9 @@ for name, r, klipper, target in results:
 
 if FILL:
     print()
-    print("The main loop's StepScheduler::fill while ramping (bench/qemu's program in hmc-emu's cycle "
-          "model; its fill() after every interrupt, or every 250 us where the case says so), cycles "
-          "per step, beside the engine that computed every ramp step (main f26254f):")
+    print("The main loop's StepScheduler::fill while ramping (bench/qemu's program in hmc-emu's "
+          "cycle model; its fill() after every interrupt, or every 250 us where the case says "
+          "so), cycles per step, beside the engine that computed every ramp step (main f26254f):")
     print()
     print("| case | fill per step, ramp segments | fill per step, one segment a step | ratio |")
     print("|---|---|---|---|")
@@ -167,6 +167,7 @@ if FILL:
             print("| %s | %.1f %% | %.1f %% |" % (name, SHARE[name] / 10, before / 10))
     for name, before in FILL_BEFORE.items():
         if name in FILL:
-            print("summary: | firmware main loop fill() per ramping step (hmc-emu cycles), %s | %.0f cycles "
-                  "per step | one segment a step (main f26254f): %.0f | %.2fx | ramp segments "
-                  "{interval, add, count} (issue 18) |" % (name, FILL[name], before, before / FILL[name]))
+            print("summary: | firmware main loop fill() per ramping step (hmc-emu cycles), %s | "
+                  "%.0f cycles per step | one segment a step (main f26254f): %.0f | %.2fx | "
+                  "ramp segments {interval, add, count} (issue 18) |"
+                  % (name, FILL[name], before, before / FILL[name]))

@@ -388,7 +388,9 @@ void run_scenario(const Scenario& sc) {
     fail(sc.name);
     return;
   }
-  if (sc.fill_every != 0 && g_share_count < 2) g_shares[g_share_count++] = {sc.name, r.fill_total, r.ticks};
+  if (sc.fill_every != 0 && g_share_count < 2) {
+    g_shares[g_share_count++] = {sc.name, r.fill_total, r.ticks};
+  }
   const Stats isr = stats_of(g_samples, r.interrupts < kMaxSamples ? r.interrupts : kMaxSamples);
   const Stats fill = stats_of(g_fill, r.fills < kMaxSamples ? r.fills : kMaxSamples);
   // | scenario | steps | interrupts | per interrupt median / p99 / max | per step (mean) |

@@ -126,7 +126,8 @@ TEST_CASE("sqrt_fraction_q16 is within 2^-16 + 1/(4 root) of the fraction, exact
       continue;
     }
     const long double exact = (std::sqrt(static_cast<long double>(m)) - root) * 65536.0L;
-    REQUIRE(std::fabs(static_cast<long double>(fraction) - exact) <= 1.0L + 65536.0L / (4.0L * root));
+    const long double bound = 1.0L + 65536.0L / (4.0L * root);
+    REQUIRE(std::fabs(static_cast<long double>(fraction) - exact) <= bound);
   }
 }
 

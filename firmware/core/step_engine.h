@@ -3,10 +3,10 @@
 // The main loop (StepScheduler, step_scheduler.cpp) works out the steps' times ahead and writes
 // them into a ring per motor as segments: runs at a constant interval, single steps, and ramp
 // segments ({interval, add, count} in Q16.16, played with adds only; ramp.h derives how long one
-// may be); the interrupt only plays the rings back: per event it compares, adds and counts. It never divides, never calls through a pointer, and
-// works on the low 32 bits of the 48 MHz clock with signed differences (an event is at most
-// kMaxSegmentTicks after the previous one; the main loop splits longer waits into events
-// without a step).
+// may be); the interrupt only plays the rings back: per event it compares, adds and counts. It
+// never divides, never calls through a pointer, and works on the low 32 bits of the 48 MHz
+// clock with signed differences (an event is at most kMaxSegmentTicks after the previous one;
+// the main loop splits longer waits into events without a step).
 //
 // One event, one interrupt, and nothing before the pulse but the entry. Each interrupt ends by
 // working out the next event: its time (`next_when`, the compare it arms), the motors due then
@@ -193,7 +193,7 @@ HMC_STEP_INLINE void begin_ramp(StepEngine& e, uint8_t i, StepLane& lane, const 
 
 // Takes lane i's next segment, next[i] holding the last event's time. Drops what is left of a
 // halted move; passes end markers. Leaves the lane armed on its next event, or not armed.
-// Per event while ramping (a ramp step is a segment of one): in RAM on the board.
+// Per segment (a ramp segment's start included): in RAM on the board.
 HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
   StepLane& lane = e.lanes[i];
   const uint8_t bit = uint8_t(1u << i);

@@ -466,7 +466,8 @@ int64_t StepScheduler::ideal_q16(const Motor& mo, uint32_t root, int64_t rest) c
 uint32_t StepScheduler::root_guess(const Motor& mo, int64_t x_q16) const {
   const int64_t base = static_cast<int64_t>(mo.base - mo.last_rise) * 65536;
   const int64_t h = mo.g == 0 ? 0 : 65536 - static_cast<int64_t>(mo.g);
-  const int64_t root = (mo.kind == PhaseKind::kUp ? x_q16 - base - h : base + 65536 - h - x_q16) >> 16;
+  const int64_t sqrt_q16 = mo.kind == PhaseKind::kUp ? x_q16 - base - h : base + 65536 - h - x_q16;
+  const int64_t root = sqrt_q16 >> 16;
   return root < 0 ? 0 : (root > 0x7FFFFFFF ? 0x7FFFFFFFu : static_cast<uint32_t>(root));
 }
 

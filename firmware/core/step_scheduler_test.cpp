@@ -479,8 +479,8 @@ TEST_CASE("stop with acceleration brakes at it to rest") {
     CHECK(worst_error(std::vector<Ticks>(rises.begin(), rises.begin() + static_cast<long>(h)), 0,
                       before) <= kTolerance);
     const Ideal braking(a, interval, 1, before.speed(static_cast<uint32_t>(h)));
-    const long double worst = worst_error(
-        std::vector<Ticks>(rises.begin() + static_cast<long>(h), rises.end()), rises[h - 1], braking);
+    const std::vector<Ticks> after(rises.begin() + static_cast<long>(h), rises.end());
+    const long double worst = worst_error(after, rises[h - 1], braking);
     CHECK(worst <= kTolerance);
     check_pulses(bench);
     report("stop while accelerating, 2 ms lead", worst);
