@@ -517,7 +517,9 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
   int64_t a0 = mo.fraction;
   if (!mo.after_ramp) {
     a0 = ideal_q16(mo, mo.root, mo.rest);
-    if (a0 < 0) a0 = 0;  // the step rose at floor(X): X's 2⁻¹⁶ can only cross its tick by that
+    // The step rose at floor(X): the computed X (within e of it, ramp.h) can only cross that
+    // tick by e.
+    if (a0 < 0) a0 = 0;
     if (a0 > 65535) a0 = 65535;
   }
   const uint32_t half = n / 2;
