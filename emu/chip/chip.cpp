@@ -201,7 +201,8 @@ uint64_t Chip::cycles_at(uint64_t ps) const {
 
 void Chip::charge_stall(uint64_t clock_cycles, uint64_t hz) {
   const uint64_t cpu = cpu_hz();
-  if (hz == 0 || cpu == 0) return;
+  // A DMAC access (master_ps_ set) waits on its own bus port, not the CPU's.
+  if (hz == 0 || cpu == 0 || master_ps_ != UINT64_MAX) return;
   charge_cycles((clock_cycles * cpu + hz - 1) / hz);
 }
 

@@ -15,6 +15,7 @@
 #include "buzzer.h"
 #include "clocks.h"
 #include "core/controller.h"
+#include "dma.h"
 #include "irq.h"
 #include "led_strips.h"
 #include "reset_cause.h"
@@ -72,6 +73,7 @@ int main() {
   samd21::watchdog_start();
 
   step_pins.init();  // STEP, DIR low; chip selects inactive (low)
+  samd21::dma_init();  // the STEP pulses' channels (step_timer) and the LED strips'
   step_timer.start();  // counting from here: the 1 ms wait below includes the set-up
   boot_leds.init();
   buzzer.init();

@@ -1,0 +1,44 @@
+// STEP pulses by DMA (step_pulses.h).
+#include "step_pulses.h"
+
+#include "board.h"
+#include "dma.h"
+#include "regs_dmac.h"
+#include "regs_port.h"
+#include "regs_timer.h"
+
+namespace hmc::samd21 {
+namespace {
+
+constexpr uint8_t kGroup = board::kDrivers[0].step.group;
+static_assert(board::kDrivers[1].step.group == kGroup && board::kDrivers[2].step.group == kGroup,
+              "every STEP pin in one port group: one OUTSET and one OUTCLR write (pin_map.h)");
+static_assert(kDmaChannels > kStepEndDmaChannel, "dma.cpp's descriptor and write-back sections "
+              "hold an entry for each channel used");
+
+constexpr uint32_t all_step_pins() {
+  uint32_t mask = 0;
+  for (const board::DriverPins& d : board::kDrivers) mask |= 1u << d.step.number;
+  return mask;
+}
+// Read by the DMAC at each CC1 match (RAM: the DMAC reads its source over the bus matrix).
+volatile uint32_t step_clear_mask = all_step_pins();
+
+constexpr uint32_t kPortGroup = port::kBase + kGroup * port::kGroupStride;
+
+}  // namespace
+
+volatile uint32_t step_set_mask = 0;
+volatile uint32_t step_pulse_end = 0xFFFFFFFFu;
+
+void step_pulses_start() {
+  step_set_mask = 0;
+  dma_start_endless_word(kStepSetDmaChannel, &step_set_mask, kPortGroup + port::kOutSet,
+                         dmac::kTriggerTc4Mc0, kStepDmaLevel);
+  dma_start_endless_word(kStepClearDmaChannel, &step_clear_mask, kPortGroup + port::kOutClr,
+                         dmac::kTriggerTc4Mc1, kStepDmaLevel);
+  dma_start_endless_word(kStepEndDmaChannel, &step_pulse_end, tc::kTc4 + tc::kCc1,
+                         dmac::kTriggerTc4Mc0, kStepDmaLevel);
+}
+
+}  // namespace hmc::samd21
