@@ -204,6 +204,7 @@ class BenchPort {
   void ack_event() { g_flags = 1; }
   void fired(uint8_t, uint32_t when) { g_compare1 = when + hmc::fw::kStepHighTicks; }  // CC1
   void disarm() { g_set_mask = 0; }
+  void park(uint32_t now) { g_compare = now; }
   uint32_t take_entry() {
     g_flags = 3;
     return now_;

@@ -35,6 +35,7 @@
 //   void fired(uint8_t motors, uint32_t when);   // STEP rose on `motors` at `when` (the armed
 //                                                // compare): its pulse ends kStepHighTicks later
 //   void disarm();                               // the armed compare raises no STEP from here
+//   void park(uint32_t now);                     // and does nothing more: moved to `now`
 //   uint32_t take_entry();                       // otherwise: clears what entered; the clock
 //   void step_high(uint8_t motors, uint32_t near);  // STEP rises now (`near`: a time within
 //                                                // 2^23 ticks of now); bit m−1 for motor m;
@@ -392,9 +393,12 @@ HMC_STEP_INLINE void run_step_interrupt(StepEngine& engine, Port& port) {
     port.disarm();
     steps = 0;
     if (Port::kArmedStepsByHardware && e.next_armed != 0) {
-      // The armed event may have come before the disarm, its STEP raised by the hardware: it
-      // is taken as made (its pulse's end set from now), before a halt could drop it uncounted.
+      // The armed compare is moved to now (past once live: no match until the counter wraps),
+      // so nothing the hardware does at it can touch a pulse this entry makes. The armed event
+      // may have come before, its STEP raised by the hardware: it is taken as made (its pulse's
+      // end set from now), before a halt could drop it uncounted.
       now = port.take_entry();
+      port.park(now);
       if (static_cast<int32_t>(e.next_when - now) <= 0) {
         steps = e.next_steps;
         if (steps != 0) port.step_high(steps, now);

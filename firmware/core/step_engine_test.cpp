@@ -44,6 +44,10 @@ struct ClockPort {
     calls += 'D';
     armed_steps = 0;
   }
+  void park(uint32_t now) {
+    calls += 'P';
+    armed = now;
+  }
   uint32_t take_entry() {
     calls += 'E';
     return clock;
@@ -173,12 +177,13 @@ TEST_CASE("step interrupt: a kick after the armed compare matched counts the ste
     port.calls.clear();
     hmc::fw::run_step_interrupt(e, port);
     INFO("kick at " << kick_at << ": " << port.calls);
-    CHECK(port.calls.rfind("DE", 0) == 0);  // disarmed first, then the clock
+    CHECK(port.calls.rfind("DEP", 0) == 0);  // disarmed first, the clock, the compare parked
     CHECK(port.armed_steps == 0);           // nothing armed after the halt
+    CHECK(port.armed == kick_at);           // the compare parked at the kick's clock
     CHECK(lane.moving == 0);
     if (kick_at >= 10960) {
       CHECK(lane.total == 2);
-      CHECK(port.calls.rfind("DEH", 0) == 0);  // the pulse's end, from now
+      CHECK(port.calls.rfind("DEPH", 0) == 0);  // the pulse's end, from now
     } else {
       CHECK(lane.total == 1);
       CHECK(port.calls.find('H') == std::string::npos);

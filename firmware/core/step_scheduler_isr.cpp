@@ -26,6 +26,7 @@ class HalStepPort {
   // Entered at the armed compare's time: STEP rises now; step_low ends the pulse.
   void fired(uint8_t motors, uint32_t) { step_high(motors); }
   void disarm() {}
+  void park(uint32_t) {}
   uint32_t take_entry() { return static_cast<uint32_t>(now_); }
 
   void step_high(uint8_t motors, uint32_t = 0) {

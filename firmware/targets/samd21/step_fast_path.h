@@ -81,6 +81,9 @@ class Samd21StepPort {
   HMC_STEP_INLINE void ack_event() { r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntMc0); }
   HMC_STEP_INLINE void fired(uint8_t, uint32_t) {}  // the DMA raised STEP and set its end at the compare
   HMC_STEP_INLINE void disarm() { step_set_mask = 0; }
+  // CC0 to a time already past once the write is live: the DMA on MC0 (the set, and the end's
+  // move) stays idle until the counter wraps (89 s); by then any entry has re-armed or parked it.
+  HMC_STEP_INLINE void park(uint32_t now) { r32(kTc + tc::kCc0) = now; }
   HMC_STEP_INLINE uint32_t take_entry() { return timer_.take_step_interrupt(); }
 
   HMC_STEP_INLINE void step_high(uint8_t motors, uint32_t near) {
