@@ -352,6 +352,7 @@ HMC_STEP_INLINE bool step_pass(StepEngine& e, Port& port, uint8_t due, uint8_t s
     }
   } else {
     port.disarm();  // nothing armed: the compare matches again only after the counter's wrap
+    e.next_armed = 0;
   }
   if (steps != 0) port.step_low(steps, mark);
   return leave;
@@ -423,8 +424,10 @@ HMC_STEP_INLINE void run_step_interrupt(StepEngine& engine, Port& port) {
     const uint8_t more = due & e.stepping;
     if (more != 0) port.step_high(more, now);
     steps = uint8_t(steps | more);
+    e.next_armed = 0;
   }
-  e.next_armed = 0;
+  // next_armed: each pass that leaves sets it (armed, or not); a fast entry's stale 1 is not read
+  // before then.
   // The entry's mark: waits and the time spent count from here (the event's time plus the
   // entry's latency), so an event waited for inside comes as late after its time as one that
   // enters the interrupt.
