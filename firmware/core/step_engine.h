@@ -10,20 +10,21 @@
 // One event, one interrupt, and no pulse to time on the CPU. Each interrupt ends by working out
 // the next event: its time (`next_when`, the compare it arms), the motors due then (`next_due`)
 // and which of them step (`next_steps`); arming it tells the port which STEP pins rise at the
-// compare. On the SAMD21 the compare's match raises them by DMA at that exact tick and a second
-// compare, written by the next interrupt to the event's time + kStepHighTicks, lowers them
-// (step_fast_path.h): the pulse is made by hardware. The next entry, when the armed compare
-// alone brought it there and the main loop asked for nothing, first sets the end of the pulse
-// that rose (`fired`), then does the bookkeeping: DIR for a due DIR event, each due motor's next
-// event (only the due ones are visited), the earliest event left and its masks, the compare.
-// Any other entry (the main loop's kick: a halt, a refilled ring, an overdue event; the
-// timer's overflow) first disarms the hardware's STEP (`disarm`), takes an armed event that
-// came meanwhile as made (its STEP may have risen: it is counted before a halt could drop it),
-// then takes the main loop's requests, the clock as "now", and steps the motors due by then
-// with the CPU (`step_high`). An event closer than the interrupt's own cost (Port::kCostTicks)
-// is waited for inside the interrupt and raised by the CPU. STEP is high at least
-// kStepHighTicks (DRV8711 datasheet, SLVSC40, "Timing Requirements": STEP high ≥ 1.9 µs, low
-// ≥ 1.9 µs, DIR setup and hold 200 ns around a STEP edge).
+// compare. On the SAMD21 the compare's match raises them by DMA at that exact tick and sets a
+// second compare to the event's time + kStepHighTicks, whose match lowers them
+// (targets/samd21/step_pulses.h): the pulse is made by hardware. The next entry, when the armed
+// compare alone brought it there and the main loop asked for nothing, has no pulse to make
+// (`fired` does nothing on the board; on the host it raises STEP) and does the bookkeeping: DIR
+// for a due DIR event, each due motor's next event (only the due ones are visited), the
+// earliest event left and its masks, the compare. Any other entry (the main loop's kick: a
+// halt, a refilled ring, an overdue event; the timer's overflow) first disarms the hardware's
+// STEP (`disarm`) and parks the compare (`park`), takes an armed event that came meanwhile as
+// made (its STEP may have risen: it is counted before a halt could drop it), then takes the
+// main loop's requests, the clock as "now", and steps the motors due by then with the CPU
+// (`step_high`). An event closer than the interrupt's own cost (Port::kCostTicks) is waited for
+// inside the interrupt and raised by the CPU. STEP is high at least kStepHighTicks (DRV8711
+// datasheet, SLVSC40, "Timing Requirements": STEP high ≥ 1.9 µs, low ≥ 1.9 µs, DIR setup and
+// hold 200 ns around a STEP edge).
 //
 // Port (a template parameter, so the board's registers are reached directly): the SAMD21's
 // Samd21StepPort (targets/samd21/step_fast_path.h) or HalStepPort (step_scheduler_isr.cpp, over
@@ -32,8 +33,8 @@
 //   static constexpr bool kArmedStepsByHardware;  // an armed compare raises STEP by itself
 //   bool event_fired(const StepEngine&);         // entered by the armed compare alone
 //   void ack_event();                            // then: clears the compare's flag
-//   void fired(uint8_t motors, uint32_t when);   // STEP rose on `motors` at `when` (the armed
-//                                                // compare): its pulse ends kStepHighTicks later
+//   void fired(uint8_t motors, uint32_t when);   // the armed compare's STEP on `motors` at
+//                                                // `when` (made by hardware, or raised here)
 //   void disarm();                               // the armed compare raises no STEP from here
 //   void park(uint32_t now);                     // and does nothing more: moved to `now`
 //   uint32_t take_entry();                       // otherwise: clears what entered; the clock
@@ -387,7 +388,7 @@ HMC_STEP_INLINE void run_step_interrupt(StepEngine& engine, Port& port) {
   if (HMC_STEP_LIKELY(fired)) {
     steps = e.next_steps;
     now = e.next_when;
-    if (steps != 0) port.fired(steps, now);  // the pulse's end first: it has a deadline
+    if (steps != 0) port.fired(steps, now);  // first: on the host this raises STEP
     port.ack_event();
     due = e.next_due;
   } else {
