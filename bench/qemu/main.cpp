@@ -223,7 +223,8 @@ class BenchPort {
     return static_cast<int32_t>(when - entry) - static_cast<int32_t>(elapsed(mark));
   }
   void wait_until(uint32_t when, uint32_t entry, uint32_t mark) {
-    while (static_cast<int32_t>(when - entry) - static_cast<int32_t>((mark - g_wait_clock) & 0xFFFFFFu) > 0) {
+    const int32_t ahead = static_cast<int32_t>(when - entry);
+    while (ahead - static_cast<int32_t>((mark - g_wait_clock) & 0xFFFFFFu) > 0) {
     }
   }
   void arm(uint32_t when, uint8_t motors) {

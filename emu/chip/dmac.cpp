@@ -24,7 +24,9 @@ constexpr unsigned kTriggerOf(uint32_t ctrlb) { return (ctrlb >> 8) & 0x3F; }
 // priority over a low level" (20.8.17).
 constexpr unsigned kLevelOf(uint32_t ctrlb) { return (ctrlb >> 5) & 3; }
 // SERCOMn TX trigger 2n+2 (20.8.17, TRIGSRC).
-constexpr bool is_sercom_tx(unsigned trigger) { return trigger >= 2 && trigger <= 12 && trigger % 2 == 0; }
+constexpr bool is_sercom_tx(unsigned trigger) {
+  return trigger >= 2 && trigger <= 12 && trigger % 2 == 0;
+}
 // TC3 MC0/MC1 0x19/0x1A, TC4 MC0/MC1 0x1C/0x1D (20.8.17, TRIGSRC).
 constexpr bool is_timer_match(unsigned trigger) {
   return trigger == 0x19 || trigger == 0x1A || trigger == 0x1C || trigger == 0x1D;
@@ -200,7 +202,8 @@ void Dmac::watch_timers() {
   for (const Channel& c : channels_) {
     if (!c.active) continue;
     const unsigned t = kTriggerOf(c.ctrlb);
-    if (t == 0x19 || t == 0x1A) tc3 |= static_cast<uint8_t>(0x10u << (t - 0x19));  // INTFLAG MC0/MC1
+    // The timer's INTFLAG bits: MC0 0x10, MC1 0x20.
+    if (t == 0x19 || t == 0x1A) tc3 |= static_cast<uint8_t>(0x10u << (t - 0x19));
     if (t == 0x1C || t == 0x1D) tc4 |= static_cast<uint8_t>(0x10u << (t - 0x1C));
   }
   chip_.tc3().set_dma_watch(tc3);
@@ -245,7 +248,8 @@ void Dmac::timer_trigger(const unsigned* triggers, unsigned trigger_count, uint6
   for (unsigned i = 0; i < kChannels; ++i) {
     if (!channels_[i].active) continue;
     const unsigned t = kTriggerOf(channels_[i].ctrlb);
-    if (std::find(triggers, triggers + trigger_count, t) != triggers + trigger_count) order[count++] = i;
+    const unsigned* end = triggers + trigger_count;
+    if (std::find(triggers, end, t) != end) order[count++] = i;
   }
   std::stable_sort(order, order + count, [this](unsigned a, unsigned b) {
     return kLevelOf(channels_[a].ctrlb) > kLevelOf(channels_[b].ctrlb);

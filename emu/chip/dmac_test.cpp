@@ -50,7 +50,8 @@ struct StepBench {
   uint32_t step2 = 1u << samd21::board::kDrivers[1].step.number;
 
   StepBench() {
-    static_assert(samd21::board::kDrivers[0].step.group == 0 && samd21::board::kDrivers[1].step.group == 0,
+    static_assert(samd21::board::kDrivers[0].step.group == 0 &&
+                      samd21::board::kDrivers[1].step.group == 0,
                   "the bench drives STEP 1 and 2 on PA");
     chip.set_memory(&ram);
     chip.bus_write(0x40000420, chip.bus_read(0x40000420, 4) | (1u << 12), 4);  // PM APBCMASK: TC4
@@ -81,7 +82,8 @@ struct StepBench {
     chip.bus_write(kTc4 + 0x18, cc0, 4);
     chip.bus_write(kTc4 + 0x1C, cc1, 4);
   }
-  // Runs to `tick` of the counter in one go (as a long CPU block would), then lets the chip catch up.
+  // Runs to `tick` of the counter in one go (as a long CPU block would), then lets the chip
+  // catch up.
   void run_to(uint64_t tick) {
     chip.charge_cycles(chip.cycles_at(origin_ps + ticks(tick)) - chip.cycles());
     chip.advance();
@@ -109,7 +111,7 @@ TEST_CASE("TC4 MC0 and MC1 trigger word beats to PORT OUTSET and OUTCLR at the m
   CHECK(b.axis(0).pulses.high_max_ps == b.axis(0).pulses.high_min_ps);
   CHECK((b.chip.port().out(0) & (b.step1 | b.step2)) == 0);
 
-  SECTION("the self-linked descriptors run again at the next matches, with the masks RAM holds then") {
+  SECTION("the self-linked descriptors run again at the next matches, with RAM's masks then") {
     b.ram.word(kSetMask, b.step1 | b.step2);
     b.compares(6000, 6096);
     b.run_to(6050);  // in the middle of the pulse: both pins high

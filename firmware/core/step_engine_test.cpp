@@ -63,7 +63,9 @@ struct ClockPort {
     if (clock - mark < hmc::fw::kStepHighTicks) clock = mark + hmc::fw::kStepHighTicks;
   }
   void set_dir(uint8_t, bool) { clock += kCallTicks; }
-  int32_t ticks_until(uint32_t when, uint32_t, uint32_t) { return static_cast<int32_t>(when - clock); }
+  int32_t ticks_until(uint32_t when, uint32_t, uint32_t) {
+    return static_cast<int32_t>(when - clock);
+  }
   void wait_until(uint32_t when, uint32_t, uint32_t) {
     calls += 'W';
     if (ticks_until(when, 0, 0) > 0) clock = when;
@@ -151,7 +153,7 @@ TEST_CASE("step interrupt: an entry by its compare sets the pulse's end before a
   CHECK(lane.total == 8);
 }
 
-TEST_CASE("step interrupt: a kick after the armed compare matched counts the step the hardware made") {
+TEST_CASE("step interrupt: a kick after the armed compare counts the step the hardware made") {
   // Motor 1 steps every 960 ticks from 10 000; the main loop asks for a halt at the next step's
   // time. Where the compare matched before the kick was taken, the hardware raised STEP: the
   // step is counted and its pulse given an end before the halt drops the move. Where the kick

@@ -64,13 +64,15 @@ inline constexpr uint32_t kIobusStep =
 class Samd21StepPort {
  public:
   // From the clock's read to CC0 live: the rest of the arm (two RAM stores, the CC0 store) and
-  // CC0's synchronisation (5 GCLK periods, datasheet "TC", "Synchronization"), with a margin.
-  // An event closer than this is waited for inside the interrupt and raised by the CPU.
+  // CC0's synchronisation (5 GCLK periods, datasheet "TC", "Synchronization"), plus the clock's
+  // lag behind the counter (up to 12: step_timer.h), with a margin. An event closer than this
+  // is waited for inside the interrupt and raised by the CPU.
   static constexpr uint32_t kCostTicks = 48;
   static constexpr bool kArmedStepsByHardware = true;
-  // The clock's read to the CPU's STEP write after it: the CC1 write, its synchronisation wait
-  // (5-6 GCLK periods + 2-3 bus cycles), the IOBUS store, with a margin.
-  static constexpr uint32_t kRaiseSlackTicks = 32;
+  // The clock's read to the CPU's STEP write after it (the CC1 write, its synchronisation wait
+  // of 5-6 GCLK periods + 2-3 bus cycles, the IOBUS store) plus the clock's lag (up to 12),
+  // with a margin.
+  static constexpr uint32_t kRaiseSlackTicks = 40;
 
   explicit Samd21StepPort(StepTimer& timer) : timer_(timer) {}
 
@@ -79,7 +81,8 @@ class Samd21StepPort {
     return (r8(kTc + tc::kIntFlag) & (tc::kIntOvf | tc::kIntMc0)) == tc::kIntMc0;
   }
   HMC_STEP_INLINE void ack_event() { r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntMc0); }
-  HMC_STEP_INLINE void fired(uint8_t, uint32_t) {}  // the DMA raised STEP and set its end at the compare
+  // The DMA raised STEP and set its end at the compare.
+  HMC_STEP_INLINE void fired(uint8_t, uint32_t) {}
   HMC_STEP_INLINE void disarm() { step_set_mask = 0; }
   // CC0 to a time already past once the write is live: the DMA on MC0 (the set, and the end's
   // move) stays idle until the counter wraps (89 s); by then any entry has re-armed or parked it.
@@ -89,11 +92,14 @@ class Samd21StepPort {
   HMC_STEP_INLINE void step_high(uint8_t motors, uint32_t near) {
     r32(kTc + tc::kCc1) = near + ticks_since(near) + fw::kStepHighTicks + kRaiseSlackTicks;
     wait_clear8(kTc + tc::kStatus, tc::kSyncBusy);
-    r32(step_fast_path_detail::kIobusStep + port::kOutSet) = step_fast_path_detail::kMasks.of[motors];
+    using namespace step_fast_path_detail;
+    r32(kIobusStep + port::kOutSet) = kMasks.of[motors];
   }
   HMC_STEP_INLINE uint32_t stopwatch() { return 0; }  // the clock is read instead (ticks_until)
   HMC_STEP_INLINE void step_low(uint8_t, uint32_t) {}  // CC1's DMA ends every pulse
-  HMC_STEP_INLINE void set_dir(uint8_t index, bool reverse) { pin_set(board::kDrivers[index].dir, reverse); }
+  HMC_STEP_INLINE void set_dir(uint8_t index, bool reverse) {
+    pin_set(board::kDrivers[index].dir, reverse);
+  }
   // `entry` (the entry's event time or clock) is within the interrupt's run of now: an event far
   // from it (beyond the 24-bit clock's reach) is far from now.
   HMC_STEP_INLINE int32_t ticks_until(uint32_t when, uint32_t entry, uint32_t) {
@@ -101,7 +107,8 @@ class Samd21StepPort {
     if (HMC_STEP_UNLIKELY(ahead >= kFarTicks)) return ahead;
     return -static_cast<int32_t>(ticks_since(when));
   }
-  HMC_STEP_INLINE void wait_until(uint32_t when, uint32_t, uint32_t) {  // only for an event kCostTicks close
+  // Only for an event less than kCostTicks away.
+  HMC_STEP_INLINE void wait_until(uint32_t when, uint32_t, uint32_t) {
     while (static_cast<int32_t>(ticks_since(when)) < 0) {
     }
   }

@@ -51,11 +51,14 @@ void StepTimer::start() {
   r16(kTc + tc::kCtrlA) = static_cast<uint16_t>(tc::kMode32 | tc::prescaler(0) | tc::kEnable);
   sync();
   // Both count the CPU clock (GCLK generator 0 undivided: clocks.h), SysTick down through 2^24
-  // values (RVR 0xFFFFFF), the counter up: their sum stays fixed modulo 2^24. SysTick first,
-  // so the counter's value (taken at its read request, later) makes the offset run ahead.
+  // values (RVR 0xFFFFFF), the counter up: their sum stays fixed modulo 2^24. SysTick is read
+  // first, the counter at its read request a few cycles later (the store, the request reaching
+  // the timer's clock domain): the offset taken kBehindTicks lower than read puts the clock at
+  // or behind the counter, never ahead (a wait on it never ends early).
+  constexpr uint32_t kBehindTicks = 12;
   const uint32_t primask = irq_save();
   const uint32_t systick = r32(systick::kCvr);
-  systick_offset_ = read_count() + systick;
+  systick_offset_ = read_count() + systick - kBehindTicks;
   irq_restore(primask);
 }
 

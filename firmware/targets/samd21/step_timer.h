@@ -34,8 +34,8 @@ class StepTimer final : public hal::StepTimer {
   // returns the counter (low 32 bits).
   uint32_t take_step_interrupt();
   // SysTick counts the same 48 MHz clock down through 24 bits: this minus SysTick is the
-  // counter's low 24 bits, read with one load and no synchronisation wait (set by start(); a
-  // few ticks ahead of the counter, never behind: the counter is read after SysTick).
+  // counter's low 24 bits, read with one load and no synchronisation wait (set by start(); up
+  // to 12 ticks behind the counter, never ahead).
   uint32_t systick_offset() const { return systick_offset_; }
 
  private:
