@@ -9,9 +9,9 @@
 //    docs/firmware.md, "The step engine", for the low time this leaves), never earlier.
 //  - Entry: INTFLAG holding MC0 alone (the compare the last interrupt armed, no overflow) is the
 //    fast entry: its pulse is already timed, so the flag is cleared and the bookkeeping done.
-//    Anything else (the main loop's pend, an overflow) first zeroes `step_set_mask` (an armed
-//    compare then raises nothing), then goes through StepTimer::take_step_interrupt (flags
-//    cleared, overflow counted, the counter read as "now").
+//    Anything else (the main loop's pend, an overflow) first zeroes the DMA's set mask (an armed
+//    compare then raises nothing) and parks CC0, then goes through
+//    StepTimer::take_step_interrupt (flags cleared, overflow counted, the counter read as "now").
 //  - STEP by the CPU (an event waited for inside the interrupt, or due at a slow entry): CC1 set
 //    to the clock + kStepHighTicks + kRaiseSlackTicks, its synchronisation waited for (so an
 //    earlier CC1 still pending cannot end the new pulse), then one IOBUS OUTSET: the pulse is at
@@ -40,20 +40,6 @@ namespace hmc::samd21 {
 
 namespace step_fast_path_detail {
 
-// OUTSET masks of the STEP pins' port group for each set of motors (bit m−1 for motor m).
-struct StepMasks {
-  uint32_t of[8];
-};
-constexpr StepMasks step_masks() {
-  StepMasks masks{};
-  for (uint8_t motors = 0; motors < 8; ++motors) {
-    for (uint8_t i = 0; i < 3; ++i) {
-      if ((motors & (1u << i)) != 0) masks.of[motors] |= 1u << board::kDrivers[i].step.number;
-    }
-  }
-  return masks;
-}
-inline constexpr StepMasks kMasks = step_masks();
 inline constexpr uint32_t kIobusStep =
     port::kIobusBase + board::kDrivers[0].step.group * port::kGroupStride;
 
@@ -83,7 +69,7 @@ class Samd21StepPort {
   HMC_STEP_INLINE void ack_event() { r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntMc0); }
   // The DMA raised STEP and set its end at the compare.
   HMC_STEP_INLINE void fired(uint8_t, uint32_t) {}
-  HMC_STEP_INLINE void disarm() { step_set_mask = 0; }
+  HMC_STEP_INLINE void disarm() { step_pulse_words.set_mask = 0; }
   // CC0 to a time already past once the write is live: the DMA on MC0 (the set, and the end's
   // move) stays idle until the counter wraps (89 s); by then any entry has re-armed or parked it.
   HMC_STEP_INLINE void park(uint32_t now) { r32(kTc + tc::kCc0) = now; }
@@ -92,8 +78,7 @@ class Samd21StepPort {
   HMC_STEP_INLINE void step_high(uint8_t motors, uint32_t near) {
     r32(kTc + tc::kCc1) = near + ticks_since(near) + fw::kStepHighTicks + kRaiseSlackTicks;
     wait_clear8(kTc + tc::kStatus, tc::kSyncBusy);
-    using namespace step_fast_path_detail;
-    r32(kIobusStep + port::kOutSet) = kMasks.of[motors];
+    r32(step_fast_path_detail::kIobusStep + port::kOutSet) = step_pulse_words.masks[motors];
   }
   HMC_STEP_INLINE uint32_t stopwatch() { return 0; }  // the clock is read instead (ticks_until)
   HMC_STEP_INLINE void step_low(uint8_t, uint32_t) {}  // CC1's DMA ends every pulse
@@ -115,8 +100,9 @@ class Samd21StepPort {
   // The DMA's words first: the old CC0 is past, so nothing matches before the new one is live.
   // No wait for the write's synchronisation: a later write to the timer stalls until it is done.
   HMC_STEP_INLINE void arm(uint32_t when, uint8_t motors) {
-    step_set_mask = step_fast_path_detail::kMasks.of[motors];
-    step_pulse_end = when + fw::kStepHighTicks;
+    StepPulseWords& w = *fw::step_engine_detail::based(&step_pulse_words);
+    w.set_mask = w.masks[motors];
+    w.end = when + fw::kStepHighTicks;
     r32(kTc + tc::kCc0) = when;
   }
 
