@@ -56,8 +56,8 @@ volatile samd21::ClockSource clock_source;
 }  // namespace
 
 // In RAM (.ramfunc, samd21_sections.ld): no flash wait states on the step path. -O2 here (the
-// rest is -Os): the common path then branches less and spills less, 205 cycles a step with one
-// motor against 222 at -Os (measured when it was set) (scripts/bench cycles), for ≈ 1 KiB more RAM code.
+// rest is -Os): the common path then branches less and spills less (one motor: 205 cycles a step
+// against 222 at -Os when it was set, scripts/bench cycles), for ≈ 1 KiB more RAM code.
 extern "C" __attribute__((section(".ramfunc.irq_tc4"), optimize("O2"))) void irq_tc4() {
   samd21::run_step_fast_path(step_timer, controller.step_engine());
 }
