@@ -235,6 +235,7 @@ class Emulator {
       if (!measuring_ && now_ps() >= static_cast<uint64_t>(options_.measure_from_s * 1e12)) {
         measuring_ = true;
         measure_start_ = snapshot();
+        machine_.chip->board().reset_pulse_figures();
       }
       if (apply_due_events()) quiet_since = now_ps();
       Chip& chip = *machine_.chip;
@@ -484,6 +485,16 @@ int run(const Options& options) {
                  to.instructions - from.instructions, to.flash_wait_cycles - from.flash_wait_cycles,
                  to.steps[0] - from.steps[0], to.steps[1] - from.steps[1],
                  to.steps[2] - from.steps[2]);
+    // STEP pulse timing per motor over the window, in ns (the DRV8711 wants ≥ 1900 high and low).
+    for (unsigned motor = 0; motor < 3; ++motor) {
+      const Board::Axis::Pulses& p = m.chip->board().axis(motor).pulses;
+      if (p.ended == 0) continue;
+      const auto ns = [](uint64_t ps) { return ps == UINT64_MAX ? -1.0 : static_cast<double>(ps) / 1000.0; };
+      std::fprintf(stderr, "hmc-emu: STEP %u: %" PRIu64 " pulses, high %.1f-%.1f ns, low >= %.1f ns, "
+                           "period %.1f-%.1f ns\n",
+                   motor + 1, p.ended, ns(p.high_min_ps), ns(p.high_max_ps), ns(p.low_min_ps),
+                   ns(p.period_min_ps), ns(p.period_max_ps));
+    }
     const uint64_t thread = to.thread_cycles - from.thread_cycles;
     std::fprintf(stderr, "hmc-emu: thread mode (the main loop): %" PRIu64 " cycles (%.2f %% of the CPU)\n", thread,
                  cycles != 0 ? 100.0 * static_cast<double>(thread) / static_cast<double>(cycles) : 0.0);

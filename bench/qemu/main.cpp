@@ -167,17 +167,17 @@ Stats stats_of(uint16_t* a, uint32_t n) {
 
 // The main loop's HAL (StepScheduler::fill, start) on plain variables, and the step interrupt's
 // port doing what the SAMD21's (firmware/targets/samd21/step_fast_path.h) does in one register
-// access per call, on volatile variables: STEP up and down one store each, the pulse's SysTick
-// read one load, its wait one load and compare (the fake counter says the pulse time is over:
-// on the chip the interrupt's own work overlaps most of the 96 cycles), the compare one store
-// (the chip's write also waits for synchronisation), DIR one store.
-constexpr uint32_t kBenchCostTicks = 192;  // as Samd21StepPort::kCostTicks
-volatile uint32_t g_port = 0;     // OUTSET / OUTCLR
+// access per call, on volatile variables: the armed STEP's end (CC1) one store, the DMA's mask
+// one store, a CPU-raised STEP two stores, SysTick one load, the compare one store (the chip's
+// write also waits for synchronisation), DIR one store. The pulses themselves are the DMA's.
+constexpr uint32_t kBenchCostTicks = 64;  // as Samd21StepPort::kCostTicks
+volatile uint32_t g_port = 0;     // OUTSET
 volatile uint32_t g_dir = 0;
-volatile uint32_t g_systick = 0;  // SysTick at the interrupt's entry and the pulse's start
-volatile uint32_t g_pulse_clock = 0u - hmc::fw::kStepHighTicks;  // ... at its end
+volatile uint32_t g_systick = 0;  // SysTick at the interrupt's entry
 volatile uint32_t g_wait_clock = 0u - 0x800000u;  // SysTick after a wait: far on
 volatile uint32_t g_compare = 0;  // CC0
+volatile uint32_t g_compare1 = 0;  // CC1: the pulse's end (the DMA lowers STEP there)
+volatile uint32_t g_set_mask = 0;  // what CC0's DMA raises
 volatile uint32_t g_armed = 0;    // set by arm(), cleared by the bench before each interrupt
 volatile uint32_t g_fired = 0;    // the interrupt is entered by the compare arm() set
 volatile uint32_t g_flags = 0;    // INTFLAG
@@ -199,27 +199,37 @@ class FakePins final : public hmc::hal::StepPins {
 class BenchPort {
  public:
   static constexpr uint32_t kCostTicks = kBenchCostTicks;
+  static constexpr bool kArmedStepsByHardware = true;
   explicit BenchPort(uint32_t now) : now_(now) {}
   bool event_fired(const hmc::fw::StepEngine&) { return g_fired != 0; }  // INTFLAG's load
   void ack_event() { g_flags = 1; }
+  void fired(uint8_t, uint32_t when) { g_compare1 = when + hmc::fw::kStepHighTicks; }  // CC1
+  void disarm() { g_set_mask = 0; }
+  void park(uint32_t now) { g_compare = now; }
   uint32_t take_entry() {
     g_flags = 3;
     return now_;
   }
-  void step_high(uint8_t motors) { g_port = motors; }
-  uint32_t stopwatch() { return g_systick; }
-  uint32_t elapsed(uint32_t mark) { return (mark - g_systick) & 0xFFFFFFu; }
-  void step_low(uint8_t motors, uint32_t mark) {
-    while (((mark - g_pulse_clock) & 0xFFFFFFu) < hmc::fw::kStepHighTicks) {
-    }
+  void step_high(uint8_t motors, uint32_t near) {  // CC1 from the clock, then OUTSET
+    g_compare1 = near + ((g_systick - near) & 0xFFFFFFu) + hmc::fw::kStepHighTicks;
     g_port = motors;
   }
+  uint32_t stopwatch() { return g_systick; }
+  uint32_t elapsed(uint32_t mark) { return (mark - g_systick) & 0xFFFFFFu; }
+  void step_low(uint8_t, uint32_t) {}  // the DMA ends the pulse
   void set_dir(uint8_t index, bool reverse) { g_dir = (uint32_t{index} << 1) | reverse; }
-  void wait_for(uint32_t mark, uint32_t ticks) {  // the fake SysTick says the wait is over at once
-    while (((mark - g_wait_clock) & 0xFFFFFFu) < ticks) {
+  // Time since entry on the fake SysTick (which says any wait is over at once): the SAMD21's
+  // port reads a SysTick-based clock instead, one load more.
+  int32_t ticks_until(uint32_t when, uint32_t entry, uint32_t mark) {
+    return static_cast<int32_t>(when - entry) - static_cast<int32_t>(elapsed(mark));
+  }
+  void wait_until(uint32_t when, uint32_t entry, uint32_t mark) {
+    const int32_t ahead = static_cast<int32_t>(when - entry);
+    while (ahead - static_cast<int32_t>((mark - g_wait_clock) & 0xFFFFFFu) > 0) {
     }
   }
-  void arm(uint32_t when) {
+  void arm(uint32_t when, uint8_t motors) {
+    g_set_mask = motors;
     g_compare = when;
     g_armed = 1;
   }

@@ -88,10 +88,28 @@ void Board::hold_limit(unsigned motor, unsigned end, int held) {
 }
 
 void Board::outputs_changed(unsigned group, uint32_t before, uint32_t after) {
+  const uint64_t at_ps = chip_.access_ps();  // a DMA beat's own time (chip.h)
   for (unsigned m = 0; m < 3; ++m) {
     const pinmap::DriverPins& pins = pinmap::kDrivers[m];
+    Axis::Pulses& pulses = axes_[m].pulses;
+    if (pins.step.group == group && bit(before, pins.step.number) && !bit(after, pins.step.number)) {
+      Axis& a = axes_[m];
+      const uint64_t high = at_ps - a.rise_ps;
+      pulses.high_min_ps = std::min(pulses.high_min_ps, high);
+      pulses.high_max_ps = std::max(pulses.high_max_ps, high);
+      ++pulses.ended;
+      a.fall_ps = at_ps;
+    }
     if (pins.step.group == group && !bit(before, pins.step.number) &&
         bit(after, pins.step.number)) {
+      Axis& a = axes_[m];
+      if (a.fall_ps != UINT64_MAX && a.rise_ps != UINT64_MAX) {
+        pulses.low_min_ps = std::min(pulses.low_min_ps, at_ps - a.fall_ps);
+        const uint64_t period = at_ps - a.rise_ps;
+        pulses.period_min_ps = std::min(pulses.period_min_ps, period);
+        pulses.period_max_ps = std::max(pulses.period_max_ps, period);
+      }
+      a.rise_ps = at_ps;
       const bool reverse = chip_.port().level(pins.dir.group, pins.dir.number);
       // DRV8711 CTRL.MODE (bits 6:3): 2^MODE microsteps per full step (7.6.1), so one STEP
       // edge moves 256 >> MODE in 1/256 step.
@@ -100,7 +118,7 @@ void Board::outputs_changed(unsigned group, uint32_t before, uint32_t after) {
       axes_[m].position += reverse ? -delta : delta;
       ++axes_[m].steps;
       if (trace_ != nullptr) {  // the hot path: no strings built for a trace nobody reads
-        traced(chip_.now_ps(), "\"ev\":\"step\",\"motor\":" + std::to_string(m + 1) +
+        traced(at_ps, "\"ev\":\"step\",\"motor\":" + std::to_string(m + 1) +
                                    ",\"pos\":" + std::to_string(axes_[m].position));
       }
       update_limits(m);

@@ -31,6 +31,15 @@ class Board : public Timed {
   struct Axis {
     int64_t position = 0;  // 1/256 step, forward positive (hmc-sim's unit)
     uint64_t steps = 0;    // STEP rising edges seen
+    // STEP's timing since the figures were last reset (reset_pulse_figures): the pulses that
+    // ended, their shortest and longest high time, the shortest low time between two pulses,
+    // the shortest and longest time between two rising edges (0 / UINT64_MAX: none yet).
+    struct Pulses {
+      uint64_t ended = 0;
+      uint64_t high_min_ps = UINT64_MAX, high_max_ps = 0, low_min_ps = UINT64_MAX;
+      uint64_t period_min_ps = UINT64_MAX, period_max_ps = 0;
+    } pulses;
+    uint64_t rise_ps = UINT64_MAX, fall_ps = UINT64_MAX;  // the last edges
     bool pressed[2] = {false, false};  // limit switch at end 0 (reverse), end 1 (forward)
   };
   struct Drv8711 {
@@ -71,6 +80,9 @@ class Board : public Timed {
   void latch_fault(unsigned motor, uint8_t bits) { drivers_[motor].regs[7] |= bits; }
 
   const Axis& axis(unsigned motor) const { return axes_[motor]; }
+  void reset_pulse_figures() {
+    for (Axis& a : axes_) a.pulses = Axis::Pulses{};
+  }
   const Drv8711& driver(unsigned chip) const { return drivers_[chip]; }
 
  private:

@@ -37,8 +37,10 @@ Chip::Chip(const ChipOptions& options) : options_(options) {
   port_ = std::make_unique<Port>(*this);
   eic_ = std::make_unique<Eic>(*this);
   for (unsigned n = 0; n < 6; ++n) sercoms_[n] = std::make_unique<Sercom>(*this, n);
-  tc3_ = std::make_unique<Tc>(*this, "TC3", 0x1B);
-  tc4_ = std::make_unique<Tc>(*this, "TC4", 0x1C);
+  // DMAC trigger sources (20.8.17 CHCTRLB.TRIGSRC): TC3 OVF 0x18, MC0 0x19, MC1 0x1A; TC4 OVF
+  // 0x1B, MC0 0x1C, MC1 0x1D (the table goes on with TC5 0x1E-0x20 ... TC7 MC0/MC1 0x25/0x26).
+  tc3_ = std::make_unique<Tc>(*this, "TC3", 0x1B, 0x18);
+  tc4_ = std::make_unique<Tc>(*this, "TC4", 0x1C, 0x1B);
   tcc0_ = std::make_unique<Tcc>(*this);
   dmac_ = std::make_unique<Dmac>(*this);
   board_ = std::make_unique<Board>(*this);
@@ -160,6 +162,8 @@ void Chip::eic_line(unsigned extint, bool level) { eic_->line_changed(extint, le
 
 void Chip::dma_trigger(unsigned sercom) { dmac_->sercom_ready(sercom); }
 
+void Chip::before_port_write() { tc4_->advance(now_ps()); }
+
 bool Chip::peripheral_output(samd21::port_functions::Unit unit, unsigned instance, unsigned index) {
   using samd21::port_functions::Unit;
   if (unit == Unit::kTcc && instance == 0) return tcc0_->output(index);
@@ -197,7 +201,8 @@ uint64_t Chip::cycles_at(uint64_t ps) const {
 
 void Chip::charge_stall(uint64_t clock_cycles, uint64_t hz) {
   const uint64_t cpu = cpu_hz();
-  if (hz == 0 || cpu == 0) return;
+  // A DMAC access (master_ps_ set) waits on its own bus port, not the CPU's.
+  if (hz == 0 || cpu == 0 || master_ps_ != UINT64_MAX) return;
   charge_cycles((clock_cycles * cpu + hz - 1) / hz);
 }
 

@@ -76,6 +76,11 @@ class Chip {
   uint64_t now_ps() const {
     return hz_ == 0 ? base_ps_ : base_ps_ + mul_div(cycles_ - base_cycles_, kPsPerSecond, hz_);
   }
+  // The time of the bus access being served: now for the CPU's; for the DMAC's, the time its
+  // beat lands (set around the access: a beat served late, at the CPU's next block boundary,
+  // keeps its own time in the pin trace and the STEP pulse figures).
+  uint64_t access_ps() const { return master_ps_ != UINT64_MAX ? master_ps_ : now_ps(); }
+  void set_master_ps(uint64_t ps) { master_ps_ = ps; }
   uint64_t cycles() const { return cycles_; }
   void charge_cycles(uint64_t cycles) { cycles_ += cycles; }
   // Cycles charged ahead (a block is charged before it runs) that an access turned out not to
@@ -134,8 +139,13 @@ class Chip {
   Nvmctrl& nvmctrl() { return *nvmctrl_; }
   Sercom& sercom(unsigned n) { return *sercoms_[n]; }
   Tc& tc3() { return *tc3_; }
+  Tc& tc4() { return *tc4_; }
+  Dmac& dmac() { return *dmac_; }
   // SERCOM `sercom`'s transmit buffer emptied at a byte's end: the DMAC may feed it (dmac.h).
   void dma_trigger(unsigned sercom);
+  // A PORT register is about to be written: DMA beats the timers triggered before now land
+  // first, so the CPU's write and the DMAC's keep their order.
+  void before_port_write();
   Tcc& tcc0() { return *tcc0_; }
   // The level a peripheral drives on its output signal (`unit` a port_functions::Unit: SERCOM
   // pad, TC or TCC WO[index]) now; false for a signal nothing drives.
@@ -161,6 +171,7 @@ class Chip {
   uint64_t base_cycles_ = 0;
   uint64_t hz_ = 0;
   uint64_t cycles_ = 0;
+  uint64_t master_ps_ = UINT64_MAX;
   void update_cpu_clock();
   uint64_t next_event_ps_ = 0;
   bool reschedule_ = true;

@@ -1,7 +1,10 @@
-// DMAC: the channels the image uses to feed the LED strips' SPI transmitters. A channel, once
-// enabled, fetches its descriptor from BASEADDR and moves one beat per trigger (the SERCOM's
-// DRE) until BTCNT beats are done; a last descriptor (DESCADDR 0, BLOCKACT 0) disables the
-// channel and sets TCMPL. SAMD21 datasheet chapter 20 (DMAC), 20.6.2.
+// DMAC: the channels the image uses — the LED strips' SPI transmitters (SERCOM TX triggers, byte
+// beats) and the STEP pulses (TC4 MC0/MC1 triggers, word beats to PORT OUTSET/OUTCLR, each
+// channel's descriptor linked to itself so it runs for ever). A channel, once enabled, fetches
+// its descriptor from BASEADDR + 16·channel and moves one beat per trigger (CHCTRLB.TRIGACT
+// BEAT) until BTCNT beats are done; then it fetches the descriptor DESCADDR points to, or, the
+// last (DESCADDR 0), disables the channel and sets TCMPL. Triggers that arrive together are
+// served in the channels' priority order. SAMD21 datasheet chapter 20 (DMAC), 20.6.2.
 #pragma once
 
 #include <array>
@@ -25,17 +28,27 @@ class Dmac : public Peripheral, public Timed {
   // CPU bus stall (a synchronised write) does not hold it up; advance() alone would serve the
   // trigger only after the stall.
   void sercom_ready(unsigned sercom);
+  // A timer's compare matches at `ps` (TRIGSRC values, `count` of them: a timer's MC0 and MC1
+  // may match at one tick): the channels on them move one beat each, in priority order,
+  // landing kTriggerToWriteCycles after the match.
+  void timer_trigger(const unsigned* triggers, unsigned count, uint64_t ps);
 
  private:
   struct Channel {
     uint8_t ctrla = 0, inten = 0, intflag = 0;
     uint32_t ctrlb = 0;
     bool active = false;
-    uint32_t source = 0, destination = 0, remaining = 0;
+    uint32_t source = 0, destination = 0, remaining = 0, next_descriptor = 0;
+    unsigned beat = 1;  // bytes
     bool source_increments = false;
+    bool block_interrupt = false;  // BTCTRL.BLOCKACT INT or BOTH
   };
   void start(unsigned channel);
+  bool load(unsigned channel, uint32_t address);
   void serve(unsigned channel);
+  void beat(unsigned channel, uint64_t ps);
+  void block_done(unsigned channel);
+  void watch_timers();
   Chip& chip_;
   uint16_t ctrl_ = 0;
   uint32_t base_ = 0, writeback_ = 0;

@@ -116,6 +116,7 @@ uint32_t Port::access(uint32_t offset, uint32_t value, unsigned size, bool write
     for (unsigned i = 0; i < 32; ++i) view.set(0x40 + i, g.pincfg[i], 1);
     return view.get(reg, size);
   }
+  chip_.before_port_write();
   const uint32_t old_out = g.out, old_dir = g.dir;
   // A narrower write lands in its bytes of the 32-bit register.
   const uint32_t shift = 8 * (reg % 4);

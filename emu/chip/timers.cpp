@@ -4,6 +4,7 @@
 #include <algorithm>
 
 #include "../board/board.h"
+#include "dmac.h"
 
 namespace hmc::emu {
 
@@ -18,8 +19,21 @@ constexpr uint16_t kCtrlAProtected = 0x3F7C;
 constexpr unsigned kTc3ClockId = 0x1B;  // GCLK_TCC2_TC3: TC3 drives the buzzer's pin
 }  // namespace
 
-Tc::Tc(Chip& chip, std::string name, unsigned clock_id)
-    : chip_(chip), name_(std::move(name)), clock_id_(clock_id) {}
+Tc::Tc(Chip& chip, std::string name, unsigned clock_id, unsigned dma_trigger_base)
+    : chip_(chip), name_(std::move(name)), clock_id_(clock_id), dma_trigger_base_(dma_trigger_base) {}
+
+void Tc::set_dma_watch(uint8_t flags) {
+  advance(chip_.now_ps());
+  dma_watch_ = flags;
+  chip_.reschedule();
+}
+
+// The time at which the count reaches `position` (its first picosecond).
+uint64_t Tc::ps_at_position(uint64_t p) const {
+  const uint64_t hz = tick_hz();
+  const Wide ps = static_cast<Wide>(p - base_position_) * Chip::kPsPerSecond + hz - 1;
+  return base_ps_ + static_cast<uint64_t>(ps / hz);
+}
 
 void Tc::reset_registers() {
   ctrla_ = 0;
@@ -88,24 +102,52 @@ void Tc::advance(uint64_t now_ps) {
     intflag_ |= flags;
     chip_.irq_changed();
   }
+  // 30.6.4.1 "DMA Operation": "Channel Match or Capture (MCx): for a compare channel, the request
+  // is set on each compare match detection and cleared on next clock cycle." A channel the DMAC
+  // listens to is an event (next_event_ps), so at most one match of it lies in (from, now];
+  // the beats are handed over with their match's time, in time order (checked_position_ is
+  // already `now`, so the PORT write a beat makes, which advances this timer first, finds
+  // nothing new).
+  const uint8_t watched = flags & dma_watch_ & (kMc0 | kMc1);
+  if (watched == 0) return;
+  uint64_t at[2] = {UINT64_MAX, UINT64_MAX};
+  for (unsigned c = 0; c < 2; ++c) {
+    if ((watched & (kMc0 << c)) == 0) continue;
+    const uint64_t value = cc_[c] % m;
+    const uint64_t first = from + 1 + ((value + m - (from + 1) % m) % m);
+    if (first + m <= now) {
+      chip_.violation(name_ + ": two compare matches of a DMA trigger between two looks at the "
+                      "timer (a period shorter than the emulator's step) are not modelled");
+      return;
+    }
+    at[c] = ps_at_position(first);
+  }
+  const unsigned mc[2] = {dma_trigger_base_ + 1, dma_trigger_base_ + 2};
+  if (at[0] == at[1]) {
+    chip_.dmac().timer_trigger(mc, 2, at[0]);  // both at one tick: the DMAC's arbitration orders them
+    return;
+  }
+  const unsigned first = at[1] < at[0] ? 1u : 0u;
+  for (unsigned c : {first, 1u - first}) {
+    if (at[c] != UINT64_MAX) chip_.dmac().timer_trigger(&mc[c], 1, at[c]);
+  }
 }
 
 uint64_t Tc::next_event_ps() const {
   const uint64_t hz = tick_hz();
-  if (hz == 0 || (inten_ & (kOvf | kMc0 | kMc1)) == 0) return UINT64_MAX;
+  const uint8_t wanted = inten_ | dma_watch_;
+  if (hz == 0 || (wanted & (kOvf | kMc0 | kMc1)) == 0) return UINT64_MAX;
   const uint64_t m = modulus();
   const uint64_t from = checked_position_;
   uint64_t next = UINT64_MAX;
   const uint64_t values[3] = {0, cc_[0] % m, cc_[1] % m};
   const uint8_t bits[3] = {kOvf, kMc0, kMc1};
   for (int i = 0; i < 3; ++i) {
-    if ((inten_ & bits[i]) == 0) continue;
+    if ((wanted & bits[i]) == 0) continue;
     const uint64_t p = from + 1 + ((values[i] + m - (from + 1) % m) % m);
     next = p < next ? p : next;
   }
-  // Time at which position reaches `next`.
-  const Wide ps = static_cast<Wide>(next - base_position_) * Chip::kPsPerSecond + hz - 1;
-  return base_ps_ + static_cast<uint64_t>(ps / hz);
+  return ps_at_position(next);
 }
 
 uint32_t Tc::read(uint32_t offset, unsigned size) {

@@ -13,8 +13,9 @@ namespace hmc::emu {
 
 class Tc : public Peripheral, public Timed {
  public:
-  // `clock_id`: GCLK channel (0x1B TC3, 0x1C TC4/TC5).
-  Tc(Chip& chip, std::string name, unsigned clock_id);
+  // `clock_id`: GCLK channel (0x1B TC3, 0x1C TC4/TC5); `dma_trigger_base`: the DMAC trigger
+  // source of its OVF (MC0 and MC1 follow it).
+  Tc(Chip& chip, std::string name, unsigned clock_id, unsigned dma_trigger_base);
   uint32_t read(uint32_t offset, unsigned size) override;
   void write(uint32_t offset, uint32_t value, unsigned size) override;
   void advance(uint64_t now_ps) override;
@@ -23,6 +24,10 @@ class Tc : public Peripheral, public Timed {
   // Frequency mode (MFRQ) output: toggles per second / 2, or 0 when stopped.
   uint64_t output_hz() const;
   bool running() const { return enabled() && tick_hz() != 0; }
+  // The DMAC has a channel on MC0 and/or MC1 (kMc0/kMc1 bits of INTFLAG): their matches are
+  // events then, served at their exact time.
+  void set_dma_watch(uint8_t flags);
+  unsigned dma_trigger_base() const { return dma_trigger_base_; }
 
  private:
   bool enabled() const { return (ctrla_ & 2) != 0; }
@@ -33,10 +38,13 @@ class Tc : public Peripheral, public Timed {
   uint64_t position(uint64_t now_ps) const;  // counts since the count was last set, plus it
   void rebase();
   void reset_registers();
+  uint64_t ps_at_position(uint64_t position) const;
 
   Chip& chip_;
   std::string name_;
   unsigned clock_id_;
+  unsigned dma_trigger_base_;
+  uint8_t dma_watch_ = 0;
   uint16_t ctrla_ = 0;
   uint8_t inten_ = 0, intflag_ = 0;
   uint32_t cc_[2] = {0, 0};

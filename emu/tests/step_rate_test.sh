@@ -39,6 +39,14 @@ if [[ $(grep -v '^STX#[0-9]*#EV' "$work/out" | head -3) != "$want" ]]; then
 fi
 expected=$(awk -v a="$from" -v b="$to" 'BEGIN { printf "%.1f", (b - a) * 50000 }')
 echo "motor 1: $m1 steps from $from s to $to s, $expected at 50 000 a second"
+# The DMA's pulses (step_pulses.h): 2.0 us high, each rise exactly 20 us after the one before.
+pulses=$(grep -o 'STEP 1: [0-9]* pulses, high [0-9.]*-[0-9.]* ns, low >= [0-9.-]* ns, period [0-9.]*-[0-9.]* ns' "$work/err")
+echo "$pulses"
+read -r high_min high_max low_min period_min period_max < <(sed -E 's/.*high ([0-9.]+)-([0-9.]+) ns, low >= ([0-9.-]+) ns, period ([0-9.]+)-([0-9.]+) ns/\1 \2 \3 \4 \5/' <<<"$pulses")
+if [[ -z $period_max ]] || ! awk -v a="$high_min" -v b="$high_max" -v l="$low_min" -v p="$period_min" -v q="$period_max" \
+    'BEGIN { exit !(a >= 1999 && b <= 2001 && l >= 1900 && p >= 19999 && q <= 20001) }'; then
+  echo "FAIL: expected STEP 2000 ns high, >= 1900 ns low, rises 20 000 ns apart"; exit 1
+fi
 if ! awk -v n="$m1" -v e="$expected" 'BEGIN { exit !(n - e <= 1 && e - n <= 1) }' || (( m2 != 0 || m3 != 0 )); then
   echo "FAIL: expected 50 000 ± 1 steps a second of motor 1 alone"; exit 1
 fi

@@ -2,7 +2,11 @@
 # The real image's step interrupt in hmc-emu: one motor at 100 us (10 000 steps/s) makes one
 # interrupt per step, each within its period. Fails if an interrupt held back by PRIMASK waits for
 # the next peripheral event instead of the CPSIE (the step engine then catches up with a burst
-# of steps in one interrupt: before the fix, 4 940 interrupts for 9 001 steps).
+# of steps in one interrupt: before the fix, 4 940 interrupts for 9 001 steps). The STEP pulses
+# are the DMA's (firmware/targets/samd21/step_pulses.h): each high 2.0 us (kStepHighTicks; the
+# DRV8711 wants >= 1.9 us high and low) and rising exactly 100 us after the one before. Fails if
+# the DMA's clear did not come (a pulse too long or too short) or a rise came off its compare
+# (the CPU-made pulses before measured high 3.0-3.8 us and periods 98.4-101.5 us).
 # Usage: step_timing_test.sh HMC_EMU IMAGE_DIR
 # Without the images the test is skipped (77), unless CI=true.
 set -uo pipefail
@@ -31,4 +35,15 @@ if (( entries < steps - 1 || entries > steps + 1 )); then
   echo "FAIL: $entries step interrupts for $steps steps (expected one each)"; exit 1
 fi
 if (( per_entry >= 4800 )); then echo "FAIL: an interrupt of $per_entry cycles outlasts its 4 800-cycle period"; exit 1; fi
+pulses=$(grep -o 'STEP 1: [0-9]* pulses, high [0-9.]*-[0-9.]* ns, low >= [0-9.-]* ns, period [0-9.]*-[0-9.]* ns' <<<"$stats")
+echo "$pulses"
+read -r high_min high_max low_min period_min period_max < <(sed -E 's/.*high ([0-9.]+)-([0-9.]+) ns, low >= ([0-9.-]+) ns, period ([0-9.]+)-([0-9.]+) ns/\1 \2 \3 \4 \5/' <<<"$pulses")
+if [[ -z $period_max ]]; then echo "FAIL: no STEP pulse figures from hmc-emu"; exit 1; fi
+if ! awk -v a="$high_min" -v b="$high_max" 'BEGIN { exit !(a >= 1999 && b <= 2001) }'; then
+  echo "FAIL: STEP high $high_min-$high_max ns, expected 2000 (the DMA's clear 96 ticks after the rise)"; exit 1
+fi
+if ! awk -v a="$low_min" 'BEGIN { exit !(a >= 1900) }'; then echo "FAIL: STEP low $low_min ns < 1900"; exit 1; fi
+if ! awk -v a="$period_min" -v b="$period_max" 'BEGIN { exit !(a >= 99999 && b <= 100001) }'; then
+  echo "FAIL: STEP rises $period_min-$period_max ns apart, expected 100 000 (each at its compare)"; exit 1
+fi
 echo "ok"

@@ -308,6 +308,10 @@ void Controller::advance_self_test() {
   for (uint8_t motor = 1; motor <= proto::kMotorCount; ++motor) {
     Motor& mo = motors_[index(motor)];
     if (mo.state != MotorState::kSelfTest) continue;
+    // Its end is this phase's: taken here. A motion that ended after check_motions() looked at
+    // this motor (the interrupt runs on) would otherwise be found by the next poll with the
+    // motor idle, and reported as a move of the host's (EVD completed).
+    mo.seen_finished = scheduler_.finished(motor);
     mo.state = MotorState::kIdle;
     mo.rate = 0;
     mo.toward = kNoEnd;

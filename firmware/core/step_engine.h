@@ -8,34 +8,51 @@
 // clock with signed differences (an event is at most kMaxSegmentTicks after the previous one;
 // the main loop splits longer waits into events without a step).
 //
-// One event, one interrupt, and nothing before the pulse but the entry. Each interrupt ends by
-// working out the next event: its time (`next_when`, the compare it arms), the motors due then
-// (`next_due`) and which of them step (`next_steps`). The next entry, when the armed compare
-// alone brought it there and the main loop asked for nothing, raises STEP on `next_steps` with
-// one port write as its first action; only then, while the pulse is high, does it do the
-// bookkeeping: DIR for a due DIR event, each due motor's next event (only the due ones are
-// visited), the earliest event left and its masks, the compare. It then waits until the pulse
-// has been high kStepHighTicks (DRV8711 datasheet, SLVSC40, "Timing Requirements": STEP high
-// ≥ 1.9 µs, low ≥ 1.9 µs, DIR setup and hold 200 ns around a STEP edge), lowers STEP and
-// returns. Any other entry (the main loop's kick: a halt, a refilled ring, an overdue event;
-// the timer's overflow) takes the clock as "now", takes the main loop's requests first, and
-// steps the motors due by then. An event closer than the interrupt's own cost
-// (Port::kCostTicks) is waited for inside the interrupt instead of leaving and coming back.
+// One event, one interrupt, and no pulse to time on the CPU. Each interrupt ends by working out
+// the next event: its time (`next_when`, the compare it arms), the motors due then (`next_due`)
+// and which of them step (`next_steps`); arming it tells the port which STEP pins rise at the
+// compare. On the SAMD21 the compare's match raises them by DMA at that exact tick and sets a
+// second compare to the event's time + kStepHighTicks, whose match lowers them
+// (targets/samd21/step_pulses.h): the pulse is made by hardware. The next entry, when the armed
+// compare alone brought it there and the main loop asked for nothing, has no pulse to make
+// (`fired` does nothing on the board; on the host it raises STEP) and does the bookkeeping: DIR
+// for a due DIR event, each due motor's next event (only the due ones are visited), the
+// earliest event left and its masks, the compare. Any other entry (the main loop's kick: a
+// halt, a refilled ring, an overdue event; the timer's overflow) first disarms the hardware's
+// STEP (`disarm`) and parks the compare (`park`), takes an armed event that came meanwhile as
+// made (its STEP may have risen: it is counted before a halt could drop it), then takes the
+// main loop's requests, the clock as "now", and steps the motors due by then with the CPU
+// (`step_high`). An event closer than the interrupt's own cost (Port::kCostTicks) is waited for
+// inside the interrupt and raised by the CPU. STEP is high at least kStepHighTicks (DRV8711
+// datasheet, SLVSC40, "Timing Requirements": STEP high ≥ 1.9 µs, low ≥ 1.9 µs, DIR setup and
+// hold 200 ns around a STEP edge).
 //
 // Port (a template parameter, so the board's registers are reached directly): the SAMD21's
 // Samd21StepPort (targets/samd21/step_fast_path.h) or HalStepPort (step_scheduler_isr.cpp, over
 // the HAL interfaces, for the simulator and the tests). It provides:
 //   static constexpr uint32_t kCostTicks;
+//   static constexpr bool kArmedStepsByHardware;  // an armed compare raises STEP by itself
 //   bool event_fired(const StepEngine&);         // entered by the armed compare alone
 //   void ack_event();                            // then: clears the compare's flag
+//   void fired(uint8_t motors, uint32_t when);   // the armed compare's STEP on `motors` at
+//                                                // `when` (made by hardware, or raised here)
+//   void disarm();                               // the armed compare raises no STEP from here
+//   void park(uint32_t now);                     // and does nothing more: moved to `now`
 //   uint32_t take_entry();                       // otherwise: clears what entered; the clock
-//   void step_high(uint8_t motors);              // bit m−1 for motor m
+//   void step_high(uint8_t motors, uint32_t near);  // STEP rises now (`near`: a time within
+//                                                // 2^23 ticks of now); bit m−1 for motor m;
+//                                                // the pulse ends ≥ kStepHighTicks later
 //   uint32_t stopwatch();                        // a mark on a free-running tick count
-//   void step_low(uint8_t motors, uint32_t mark);  // once kStepHighTicks have passed since mark
+//   void step_low(uint8_t motors, uint32_t mark);  // a pulse the CPU ends, kStepHighTicks after
+//                                                // mark (nothing where hardware ends it)
 //   void set_dir(uint8_t index, bool reverse);   // index 0..2
-//   uint32_t elapsed(uint32_t mark);             // ticks since mark
-//   void wait_for(uint32_t mark, uint32_t ticks);  // until `ticks` after mark
-//   void arm(uint32_t when);                     // the interrupt at `when` (≥ kCostTicks away)
+//   // The clock against the event times: ticks from now until `when`, and a wait until then.
+//   // `entry` is the entry's event time and `entry_mark` the stopwatch at entry, for a port
+//   // that measures the time since entry rather than reading a clock.
+//   int32_t ticks_until(uint32_t when, uint32_t entry, uint32_t entry_mark);
+//   void wait_until(uint32_t when, uint32_t entry, uint32_t entry_mark);
+//   void arm(uint32_t when, uint8_t motors);     // the interrupt (and STEP on `motors`) at
+//                                                // `when`, ≥ kCostTicks away
 //
 // Ring protocol (one core, no locks): the main loop writes a segment, then advances `tail`; the
 // interrupt reads a segment, then advances `head`. A motor whose ring ran dry while moving waits
@@ -320,12 +337,11 @@ HMC_STEP_INLINE void advance(StepEngine& e, uint8_t i, uint8_t bit) {
 }
 
 // One pass of the interrupt, STEP high on `steps` since `mark`: the due motors' DIR and next
-// events, the earliest event left (e.next_when, next_due, next_steps), its compare, STEP low.
+// events, the earliest event left (e.next_when, next_due, next_steps), its compare (or none),
+// the end of a pulse the CPU times.
 // False when that event is too close to leave for: the caller waits for it and passes again.
 template <class Port>
-HMC_STEP_INLINE bool step_pass(StepEngine& e, Port& port, uint8_t due, uint8_t steps, uint32_t now,
-                               uint32_t entry, uint32_t entry_mark, uint32_t mark, bool waited) {
-  // While the pulse is high: the due motors' DIR and next events.
+HMC_STEP_INLINE void step_lanes(StepEngine& e, Port& port, uint8_t due) {
 #pragma GCC unroll 3
   for (uint8_t i = 0; i < 3; ++i) {
     const uint8_t bit = uint8_t(1u << i);
@@ -334,6 +350,13 @@ HMC_STEP_INLINE bool step_pass(StepEngine& e, Port& port, uint8_t due, uint8_t s
     if (HMC_STEP_UNLIKELY((flags & kSegDir) != 0)) port.set_dir(i, (flags & kSegReverse) != 0);
     advance(e, i, bit);
   }
+}
+
+template <class Port>
+HMC_STEP_INLINE bool step_pass(StepEngine& e, Port& port, uint8_t due, uint8_t steps, uint32_t now,
+                               uint32_t entry, uint32_t entry_mark, uint32_t mark, bool waited) {
+  // The due motors' DIR and next events.
+  step_lanes(e, port, due);
   // The earliest event left and the motors due then.
   int32_t best = 0x7FFFFFFF;
   uint8_t next_due = 0;
@@ -355,16 +378,15 @@ HMC_STEP_INLINE bool step_pass(StepEngine& e, Port& port, uint8_t due, uint8_t s
   e.next_when = when;
   e.next_due = next_due;
   e.next_steps = next_steps;
-  // Time has passed since entry (the pulse so far, at least): compare what is left. The port's
-  // clock and waits count from the entry, not from `now`, which moves on with each pass:
-  // measured from `now`, a second pass found every event already due and stepped the ring
-  // empty as fast as the CPU ran.
-  const int32_t after_entry = static_cast<int32_t>(when - entry);
+  // Time has passed since entry: compare what is left. The port's clock and waits count from
+  // the entry (or read the clock), not from `now`, which moves on with each pass: measured from
+  // `now`, a second pass found every event already due and stepped the ring empty as fast as
+  // the CPU ran.
   bool leave = true;
   if (HMC_STEP_LIKELY(next_due != 0)) {
-    if (HMC_STEP_LIKELY(after_entry - static_cast<int32_t>(port.elapsed(entry_mark)) >=
+    if (HMC_STEP_LIKELY(port.ticks_until(when, entry, entry_mark) >=
                         static_cast<int32_t>(Port::kCostTicks))) {
-      port.arm(when);  // its synchronisation overlaps the rest of the pulse
+      port.arm(when, next_steps);
       // After a wait inside, the old compare (an event this interrupt has made) may have matched
       // meanwhile: its flag would bring the next entry in early, to raise STEP for `when` at
       // once. The old value is past, so no match comes before the new one is live.
@@ -373,6 +395,9 @@ HMC_STEP_INLINE bool step_pass(StepEngine& e, Port& port, uint8_t due, uint8_t s
     } else {
       leave = false;
     }
+  } else {
+    port.disarm();  // nothing armed: the compare matches again only after the counter's wrap
+    e.next_armed = 0;
   }
   if (steps != 0) port.step_low(steps, mark);
   return leave;
@@ -385,12 +410,11 @@ HMC_STEP_INLINE void next_waited_event(StepEngine& e, Port& port, uint32_t entry
                                        uint32_t entry_mark, uint32_t& now, uint8_t& due,
                                        uint8_t& steps, uint32_t& mark) {
   const uint32_t when = e.next_when;
-  const int32_t after_entry = static_cast<int32_t>(when - entry);
-  if (after_entry > 0) port.wait_for(entry_mark, static_cast<uint32_t>(after_entry));
+  port.wait_until(when, entry, entry_mark);
   now = when;
   due = e.next_due;
   steps = e.next_steps;
-  if (steps != 0) port.step_high(steps);
+  if (steps != 0) port.step_high(steps, when);
   mark = port.stopwatch();
 }
 
@@ -407,11 +431,26 @@ HMC_STEP_INLINE void run_step_interrupt(StepEngine& engine, Port& port) {
   const bool fired = port.event_fired(e) && load8(e.pending) == 0;
   if (HMC_STEP_LIKELY(fired)) {
     steps = e.next_steps;
-    if (steps != 0) port.step_high(steps);
+    now = e.next_when;
+    if (steps != 0) port.fired(steps, now);  // first: on the host this raises STEP
     port.ack_event();
     due = e.next_due;
-    now = e.next_when;
   } else {
+    port.disarm();
+    steps = 0;
+    if (Port::kArmedStepsByHardware && e.next_armed != 0) {
+      // The armed compare is moved to now (past once live: no match until the counter wraps),
+      // so nothing the hardware does at it can touch a pulse this entry makes. The armed event
+      // may have come before, its STEP raised by the hardware: it is taken as made (its pulse's
+      // end set from now), before a halt could drop it uncounted.
+      now = port.take_entry();
+      port.park(now);
+      if (static_cast<int32_t>(e.next_when - now) <= 0) {
+        steps = e.next_steps;
+        if (steps != 0) port.step_high(steps, now);
+        step_lanes(e, port, e.next_due);
+      }
+    }
     if (load8(e.pending) != 0) {
       store8(e.pending, 0);
       take_requests(e);
@@ -427,10 +466,13 @@ HMC_STEP_INLINE void run_step_interrupt(StepEngine& engine, Port& port) {
         due |= uint8_t(1u << i);
       }
     }
-    steps = due & e.stepping;
-    if (steps != 0) port.step_high(steps);
+    const uint8_t more = due & e.stepping;
+    if (more != 0) port.step_high(more, now);
+    steps = uint8_t(steps | more);
+    e.next_armed = 0;
   }
-  e.next_armed = 0;
+  // next_armed: each pass that leaves sets it (armed, or not); a fast entry's stale 1 is not read
+  // before then.
   // The entry's mark: waits and the time spent count from here (the event's time plus the
   // entry's latency), so an event waited for inside comes as late after its time as one that
   // enters the interrupt.

@@ -1,8 +1,10 @@
 // The step interrupt (step_engine.h) against a port whose clock moves as the interrupt spends
 // time, as the SAMD21's does: events closer than the interrupt's own cost are waited for inside
 // it, and no step may come before its time however many passes one entry makes; an entry by
-// the compare raises STEP before any other port call, and an entry that waited inside clears
-// the old compare's flag with the new compare (else the next entry would come in early).
+// the compare (whose STEP the hardware raised) sets the pulse's end before any other port call,
+// an entry that waited inside clears the old compare's flag with the new compare (else the next
+// entry would come in early), and a kick disarms the compare's STEP first and counts a step the
+// hardware already made.
 #include "step_engine.h"
 
 #include <catch2/catch.hpp>
@@ -16,22 +18,41 @@ using hmc::fw::StepEngine;
 using hmc::fw::StepSegment;
 
 // A clock in ticks: each port call costs kCallTicks, waits move it to their end.
+// As on the SAMD21, the armed compare raises STEP by itself (at its time) and the interrupt only
+// sets the pulse's end.
 struct ClockPort {
   static constexpr uint32_t kCostTicks = 192;
+  static constexpr bool kArmedStepsByHardware = true;
   static constexpr uint32_t kCallTicks = 40;
   uint32_t clock = 0;
   uint32_t armed = 0;
-  bool fired = false;           // entered by the compare arm() set
-  std::vector<uint32_t> rises;  // the clock at each STEP rise
-  std::string calls;            // one letter a port call: H high, A ack, E entry, W wait, M arm
+  uint8_t armed_steps = 0;
+  bool entered_by_compare = false;  // entered by the compare arm() set
+  std::vector<uint32_t> rises;  // the time of each STEP rise
+  // One letter a port call: F the armed STEP's end, H high, A ack, D disarm, E entry, W wait,
+  // M arm.
+  std::string calls;
 
-  bool event_fired(const StepEngine&) const { return fired; }
+  bool event_fired(const StepEngine&) const { return entered_by_compare; }
   void ack_event() { calls += 'A'; }
+  void fired(uint8_t, uint32_t when) {
+    calls += 'F';
+    rises.push_back(when);  // the hardware raised it at the compare
+    clock += kCallTicks;
+  }
+  void disarm() {
+    calls += 'D';
+    armed_steps = 0;
+  }
+  void park(uint32_t now) {
+    calls += 'P';
+    armed = now;
+  }
   uint32_t take_entry() {
     calls += 'E';
     return clock;
   }
-  void step_high(uint8_t) {
+  void step_high(uint8_t, uint32_t) {
     calls += 'H';
     clock += kCallTicks;
     rises.push_back(clock);
@@ -42,13 +63,17 @@ struct ClockPort {
     if (clock - mark < hmc::fw::kStepHighTicks) clock = mark + hmc::fw::kStepHighTicks;
   }
   void set_dir(uint8_t, bool) { clock += kCallTicks; }
-  void wait_for(uint32_t mark, uint32_t ticks) {
-    calls += 'W';
-    if (clock - mark < ticks) clock = mark + ticks;
+  int32_t ticks_until(uint32_t when, uint32_t, uint32_t) {
+    return static_cast<int32_t>(when - clock);
   }
-  void arm(uint32_t when) {
+  void wait_until(uint32_t when, uint32_t, uint32_t) {
+    calls += 'W';
+    if (ticks_until(when, 0, 0) > 0) clock = when;
+  }
+  void arm(uint32_t when, uint8_t steps) {
     calls += 'M';
     armed = when;
+    armed_steps = steps;
   }
 };
 
@@ -71,7 +96,7 @@ TEST_CASE("step interrupt: events waited for inside one entry come at their time
   uint32_t now = 10000;
   for (int entries = 0; entries < 10 && port.rises.size() < due.size(); ++entries) {
     port.clock = now;
-    port.fired = entries > 0;  // the first entry is the main loop's kick (e.pending)
+    port.entered_by_compare = entries > 0;  // the first entry is the main loop's kick (e.pending)
     port.armed = 0;
     hmc::fw::run_step_interrupt(e, port);
     if (port.armed == 0) break;
@@ -86,7 +111,7 @@ TEST_CASE("step interrupt: events waited for inside one entry come at their time
   CHECK(lane.total == due.size());
 }
 
-TEST_CASE("step interrupt: an entry by its compare raises STEP before anything else") {
+TEST_CASE("step interrupt: an entry by its compare sets the pulse's end before anything else") {
   // Motor 1: steps at 10 000 and every 960 ticks after (each entry by the compare), then two
   // 150 ticks apart (waited for inside: the old compare's flag is cleared with the new compare).
   StepEngine e{};
@@ -103,7 +128,7 @@ TEST_CASE("step interrupt: an entry by its compare raises STEP before anything e
   std::vector<std::string> entries;
   for (int n = 0; n < 10; ++n) {
     port.clock = now;
-    port.fired = n > 0;
+    port.entered_by_compare = n > 0;
     port.armed = 0;
     port.calls.clear();
     hmc::fw::run_step_interrupt(e, port);
@@ -112,10 +137,11 @@ TEST_CASE("step interrupt: an entry by its compare raises STEP before anything e
     now = port.armed;
   }
   REQUIRE(entries.size() >= 5);
-  CHECK(entries[0].rfind("EH", 0) == 0);  // the kick: the clock first, then STEP
+  // The kick: the compare's STEP disarmed, the clock, then STEP by the CPU.
+  CHECK(entries[0].rfind("DEH", 0) == 0);
   for (size_t n = 1; n < entries.size(); ++n) {
     INFO("entry " << n << ": " << entries[n]);
-    if (n + 1 < entries.size()) CHECK(entries[n].rfind("HA", 0) == 0);  // STEP, then the flag
+    if (n + 1 < entries.size()) CHECK(entries[n].rfind("FA", 0) == 0);  // the end, then the flag
   }
   // The entry that waited inside (for the steps 150 ticks apart) clears the flag after arming.
   bool waited_and_cleared = false;
@@ -136,7 +162,7 @@ std::vector<uint32_t> play(StepEngine& e, ClockPort& port, uint32_t start, int e
   uint32_t now = start;
   for (int n = 0; n < entries; ++n) {
     port.clock = now;
-    port.fired = n > 0;
+    port.entered_by_compare = n > 0;
     port.armed = 0;
     hmc::fw::run_step_interrupt(e, port);
     if (port.armed == 0) break;
@@ -208,7 +234,7 @@ TEST_CASE("step interrupt: a halt inside a ramp segment leaves nothing of it") {
   lane.halt_request = 0x80 | 3;
   e.pending = 1;
   port.clock += 10;
-  port.fired = false;
+  port.entered_by_compare = false;
   hmc::fw::run_step_interrupt(e, port);
   CHECK(port.rises.size() == steps);
   CHECK(lane.ramp_left == 0);
@@ -222,4 +248,44 @@ TEST_CASE("step interrupt: a halt inside a ramp segment leaves nothing of it") {
   CHECK(armed[0] == 50700);
   CHECK(armed[1] == 51400);
   CHECK(lane.total == steps + 2);
+}
+
+TEST_CASE("step interrupt: a kick after the armed compare counts the step the hardware made") {
+  // Motor 1 steps every 960 ticks from 10 000; the main loop asks for a halt at the next step's
+  // time. Where the compare matched before the kick was taken, the hardware raised STEP: the
+  // step is counted and its pulse given an end before the halt drops the move. Where the kick
+  // came first, the compare raises nothing (disarmed) and the step is not made.
+  for (const uint32_t kick_at : {uint32_t{10970}, uint32_t{10950}}) {
+    StepEngine e{};
+    hmc::fw::StepLane& lane = e.lanes[0];
+    lane.ring[0] = StepSegment{10000, 1, 16, hmc::fw::kSegStart, 0, 0};
+    lane.ring[1] = StepSegment{960, hmc::fw::kEndlessEvents, 0, 0, 0, 0};
+    lane.tail = 2;
+    e.pending = 1;
+    ClockPort port;
+    port.clock = 10000;
+    hmc::fw::run_step_interrupt(e, port);
+    REQUIRE(port.armed == 10960);
+    REQUIRE(port.armed_steps == 1);
+    REQUIRE(lane.total == 1);
+
+    lane.halt_upto = lane.tail;
+    lane.halt_request = 0x80 | 1;
+    e.pending = 1;
+    port.clock = kick_at;
+    port.calls.clear();
+    hmc::fw::run_step_interrupt(e, port);
+    INFO("kick at " << kick_at << ": " << port.calls);
+    CHECK(port.calls.rfind("DEP", 0) == 0);  // disarmed first, the clock, the compare parked
+    CHECK(port.armed_steps == 0);           // nothing armed after the halt
+    CHECK(port.armed == kick_at);           // the compare parked at the kick's clock
+    CHECK(lane.moving == 0);
+    if (kick_at >= 10960) {
+      CHECK(lane.total == 2);
+      CHECK(port.calls.rfind("DEPH", 0) == 0);  // the pulse's end, from now
+    } else {
+      CHECK(lane.total == 1);
+      CHECK(port.calls.find('H') == std::string::npos);
+    }
+  }
 }

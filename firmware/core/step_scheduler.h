@@ -12,8 +12,9 @@
 //
 // Pulses (DRV8711 datasheet, SLVSC40, "Timing Requirements": STEP high ≥ 1.9 µs, low ≥ 1.9 µs,
 // DIR setup and hold ≥ 200 ns around a STEP edge):
-//  - STEP goes high at the step's time and low kStepHighTicks (96 = 2.0 µs) after the pin moved,
-//    inside the same interrupt (step_engine.h);
+//  - STEP goes high at the step's time and low kStepHighTicks (96 = 2.0 µs) after the pin moved:
+//    by DMA on the board (targets/samd21/step_pulses.h), inside the interrupt on the host
+//    (step_engine.h);
 //  - a move's interval is at least kMinIntervalTicks (240 = 5 µs); a step is never planned
 //    less than kStepHighTicks + kStepLowTicks after the previous one, nor less than
 //    kDirGuardTicks after a DIR change (clamped_edges() counts the clamps, which no valid plan

@@ -12,6 +12,8 @@ class HalStepPort {
  public:
   // The host's interrupt costs nothing: it leaves for any event not yet due.
   static constexpr uint32_t kCostTicks = 1;
+  // STEP rises only when the interrupt raises it (at the armed compare's entry, `fired`).
+  static constexpr bool kArmedStepsByHardware = false;
 
   HalStepPort(hal::StepTimer& timer, hal::StepPins& pins, hal::Ticks now)
       : timer_(timer), pins_(pins), now_(now) {}
@@ -21,15 +23,18 @@ class HalStepPort {
     return e.next_armed != 0 && static_cast<int32_t>(static_cast<uint32_t>(now_) - e.next_when) >= 0;
   }
   void ack_event() {}
+  // Entered at the armed compare's time: STEP rises now; step_low ends the pulse.
+  void fired(uint8_t motors, uint32_t) { step_high(motors); }
+  void disarm() {}
+  void park(uint32_t) {}
   uint32_t take_entry() { return static_cast<uint32_t>(now_); }
 
-  void step_high(uint8_t motors) {
+  void step_high(uint8_t motors, uint32_t = 0) {
     for (uint8_t i = 0; i < 3; ++i) {
       if ((motors & (1u << i)) != 0) pins_.set_step(static_cast<uint8_t>(i + 1), true);
     }
   }
   uint32_t stopwatch() { return static_cast<uint32_t>(timer_.now()); }
-  uint32_t elapsed(uint32_t mark) { return static_cast<uint32_t>(timer_.now()) - mark; }
   void step_low(uint8_t motors, uint32_t mark) {
     timer_.wait_until(widen(mark + kStepHighTicks));
     for (uint8_t i = 0; i < 3; ++i) {
@@ -39,8 +44,14 @@ class HalStepPort {
   void set_dir(uint8_t index, bool reverse) {
     pins_.set_dir(static_cast<uint8_t>(index + 1), reverse);
   }
-  void wait_for(uint32_t mark, uint32_t ticks) { timer_.wait_until(widen(mark + ticks)); }
-  void arm(uint32_t when) { timer_.schedule(widen(when)); }
+  // The host's clock is read, so the entry's mark is not needed.
+  int32_t ticks_until(uint32_t when, uint32_t, uint32_t) {
+    return static_cast<int32_t>(when - static_cast<uint32_t>(timer_.now()));
+  }
+  void wait_until(uint32_t when, uint32_t, uint32_t) {
+    if (ticks_until(when, 0, 0) > 0) timer_.wait_until(widen(when));
+  }
+  void arm(uint32_t when, uint8_t) { timer_.schedule(widen(when)); }
 
  private:
   // The 64-bit time nearest the interrupt's entry with these low 32 bits.

@@ -11,7 +11,8 @@ namespace hmc::samd21 {
 namespace {
 
 // The DMAC fetches channel n's descriptor from base + 16n and writes its state back to
-// write-back + 16n; both sections must be in RAM and 16-byte aligned.
+// write-back + 16n: both sections in RAM, 16-byte aligned, one entry per channel used (the
+// highest channel used + 1: kDmaChannels).
 dmac::Descriptor descriptors[kDmaChannels];
 dmac::Descriptor writeback[kDmaChannels];
 
@@ -42,6 +43,22 @@ void dma_start(uint32_t channel, const uint8_t* source, uint16_t count, uint32_t
   r32(dmac::kChCtrlB) = dmac::chctrlb_beat_trigger(trigger);
   r8(dmac::kChIntFlag) = 0x7;  // clear TERR, TCMPL, SUSP
   // The descriptor and the buffer are plain RAM: they must be written before the channel runs.
+  __asm__ volatile("dmb" ::: "memory");
+  r8(dmac::kChCtrlA) = static_cast<uint8_t>(dmac::kChEnable);
+}
+
+void dma_start_endless_word(uint32_t channel, const volatile uint32_t* source, uint32_t destination,
+                            uint32_t trigger, uint32_t level) {
+  dmac::Descriptor& d = descriptors[channel];
+  d.btctrl = dmac::kBtValidWord;
+  d.btcnt = 1;
+  d.srcaddr = reinterpret_cast<uint32_t>(source);  // no increment: the address itself
+  d.dstaddr = destination;
+  d.descaddr = reinterpret_cast<uint32_t>(&d);  // the next block is this one again
+  r8(dmac::kChId) = static_cast<uint8_t>(channel);
+  r8(dmac::kChCtrlA) = 0;
+  r32(dmac::kChCtrlB) = dmac::chctrlb_beat_trigger(trigger, level);
+  r8(dmac::kChIntFlag) = 0x7;
   __asm__ volatile("dmb" ::: "memory");
   r8(dmac::kChCtrlA) = static_cast<uint8_t>(dmac::kChEnable);
 }

@@ -38,8 +38,7 @@ void init_sercom(const board::LedStripPins& pins) {
 
 }  // namespace
 
-void LedStrips::init() {
-  dma_init();
+void LedStrips::init() {  // the DMAC is on already (main: dma_init before the step timer)
   for (const board::LedStripPins& pins : board::kLedStrips) init_sercom(pins);
   for (uint8_t strip = 1; strip <= 2; ++strip) set_color(strip, 0, 0, 0, 0);
 }

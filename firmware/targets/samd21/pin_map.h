@@ -195,6 +195,12 @@ constexpr Problem check(const BoardVariant& v) {
   }
   if (strip1.instance == strip2.instance) return {"both LED strips on one SERCOM", 0};
   if (tx.instance == mosi.instance) return {"UART and SPI on one SERCOM", 0};
+  // STEP: the DMAC raises and lowers every driver's STEP pin with one OUTSET and one OUTCLR
+  // write (step_pulses.h): one port group.
+  if (find(v, Role::kStep2)->pin.group != find(v, Role::kStep1)->pin.group ||
+      find(v, Role::kStep3)->pin.group != find(v, Role::kStep1)->pin.group) {
+    return {"the STEP pins are in more than one port group (one DMA write raises them)", 0};
+  }
   // EXTINT lines and TCC channels: one per signal.
   for (uint32_t i = 0; i < v.count; ++i) {
     for (uint32_t j = 0; j < i; ++j) {

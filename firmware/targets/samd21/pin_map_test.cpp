@@ -213,6 +213,15 @@ TEST_CASE("a broken table is refused, naming what is wrong") {
     });
     CHECK(problem_of(e.variant).find("two switches on one EXTINT line") == 0);
   }
+  SECTION("STEP pins in two port groups") {
+    Edited e([](auto& rows) {
+      row_of(rows, Role::kStep3).pin = pb(2);  // PA20 <-> PB02 (EXTINT2; PA20 is EXTINT4)
+      auto& limit = row_of(rows, Role::kLimit1Reverse);
+      limit.pin = pa(20);
+      limit.index = 4;
+    });
+    CHECK(problem_of(e.variant) == "the STEP pins are in more than one port group (one DMA write raises them) (row 0)");
+  }
   SECTION("both servos on one compare channel") {
     Edited e([](auto& rows) {
       auto& tilt = row_of(rows, Role::kServo2);  // PA16 is TCC0 WO[6]: CC2, as the pan servo's WO[2]

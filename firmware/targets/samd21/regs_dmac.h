@@ -20,11 +20,16 @@ inline constexpr uint32_t kCtrlEnableAllLevels = (1u << 1) | (0xFu << 8);
 inline constexpr uint32_t kChEnable = 1u << 1;
 inline constexpr uint32_t kChSwRst = 1u << 0;
 
-// CHCTRLB: TRIGSRC 13:8, TRIGACT 23:22 (2 = one beat per trigger).
-constexpr uint32_t chctrlb_beat_trigger(uint32_t trigger) {
-  return ((trigger & 0x3Fu) << 8) | (2u << 22);
+// CHCTRLB: LVL 6:5 (arbitration level: a higher level is served first), TRIGSRC 13:8, TRIGACT
+// 23:22 (2 = one beat per trigger).
+constexpr uint32_t chctrlb_beat_trigger(uint32_t trigger, uint32_t level = 0) {
+  return ((level & 3u) << 5) | ((trigger & 0x3Fu) << 8) | (2u << 22);
 }
 constexpr uint32_t sercom_tx_trigger(uint32_t sercom) { return 2u * sercom + 2u; }
+// TRIGSRC of the step timer's compare matches (datasheet "DMAC", CHCTRLB.TRIGSRC table: TC4 OVF
+// 0x1B, TC4 MC0 0x1C, TC4 MC1 0x1D).
+inline constexpr uint32_t kTriggerTc4Mc0 = 0x1C;
+inline constexpr uint32_t kTriggerTc4Mc1 = 0x1D;
 
 // Transfer descriptor (BTCTRL, BTCNT, SRCADDR, DSTADDR, DESCADDR). SRCADDR of an incrementing
 // source is the address just past the block's last beat.
@@ -40,5 +45,7 @@ static_assert(sizeof(Descriptor) == 16, "the DMAC reads 16-byte descriptors");
 // BTCTRL: VALID 0, BLOCKACT 4:3 (0: disable the channel after the last block), BEATSIZE 9:8
 // (0 = byte), SRCINC 10.
 inline constexpr uint16_t kBtValidByteSrcInc = static_cast<uint16_t>((1u << 0) | (1u << 10));
+// One word from a fixed source (BEATSIZE 2 = word, no increment).
+inline constexpr uint16_t kBtValidWord = static_cast<uint16_t>((1u << 0) | (2u << 8));
 
 }  // namespace hmc::samd21::dmac

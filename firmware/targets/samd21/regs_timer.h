@@ -20,6 +20,7 @@ inline constexpr uint32_t kIntFlag = 0x0E;
 inline constexpr uint32_t kStatus = 0x0F;   // SYNCBUSY bit 7
 inline constexpr uint32_t kCount = 0x10;    // 16 or 32 bits by mode
 inline constexpr uint32_t kCc0 = 0x18;      // 16 or 32 bits by mode
+inline constexpr uint32_t kCc1 = 0x1C;      // 32-bit mode (0x1A in 16-bit mode)
 // CTRLA fields.
 inline constexpr uint32_t kSwRst = 1u << 0;
 inline constexpr uint32_t kEnable = 1u << 1;
@@ -32,6 +33,7 @@ inline constexpr uint16_t kReadCount = static_cast<uint16_t>((1u << 15) | kCount
 // INTFLAG bits.
 inline constexpr uint32_t kIntOvf = 1u << 0;
 inline constexpr uint32_t kIntMc0 = 1u << 4;
+inline constexpr uint32_t kIntMc1 = 1u << 5;
 inline constexpr uint32_t kSyncBusy = 1u << 7;
 }  // namespace tc
 

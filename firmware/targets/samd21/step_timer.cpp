@@ -8,6 +8,7 @@
 #include "reg_access.h"
 #include "regs_system.h"
 #include "regs_timer.h"
+#include "step_pulses.h"
 
 namespace hmc::samd21 {
 namespace {
@@ -34,6 +35,9 @@ void StepTimer::start() {
   sync();
   r32(kTc + tc::kCc0) = 0xFFFFFFFFu;
   sync();
+  r32(kTc + tc::kCc1) = 0xFFFFFFFFu;
+  sync();
+  step_pulses_start();  // MC0 raises nothing until the interrupt arms a step
   r8(kTc + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntOvf | tc::kIntMc0);
   r8(kTc + tc::kIntEnSet) = static_cast<uint8_t>(tc::kIntOvf | tc::kIntMc0);
   high_ = 0;
@@ -46,6 +50,16 @@ void StepTimer::start() {
   nvic_enable(irqn::kTc4);
   r16(kTc + tc::kCtrlA) = static_cast<uint16_t>(tc::kMode32 | tc::prescaler(0) | tc::kEnable);
   sync();
+  // Both count the CPU clock (GCLK generator 0 undivided: clocks.h), SysTick down through 2^24
+  // values (RVR 0xFFFFFF), the counter up: their sum stays fixed modulo 2^24. SysTick is read
+  // first, the counter at its read request a few cycles later (the store, the request reaching
+  // the timer's clock domain): the offset taken kBehindTicks lower than read puts the clock at
+  // or behind the counter, never ahead (a wait on it never ends early).
+  constexpr uint32_t kBehindTicks = 12;
+  const uint32_t primask = irq_save();
+  const uint32_t systick = r32(systick::kCvr);
+  systick_offset_ = read_count() + systick - kBehindTicks;
+  irq_restore(primask);
 }
 
 // An overflow not yet counted (its flag still set) belongs to this read when the low word has
