@@ -193,12 +193,17 @@ struct LaneSteps {
   uint32_t last_interval;
 };
 
+// Steps since the last fold.
+HMC_STEP_INLINE uint32_t steps_since_fold(const StepLane& lane) {
+  if ((lane.flags & (kSegDir | kSegNoStep)) != 0) return 0;
+  return lane.count - lane.left - lane.ramp_left;
+}
+
 // Derives them from the lane and its next event `next` (the last event's time once the segment
 // has played out: left 0).
 HMC_STEP_INLINE LaneSteps lane_steps(const StepLane& lane, uint32_t next) {
   LaneSteps s{lane.total, lane.last_step, lane.last_interval};
-  if ((lane.flags & (kSegDir | kSegNoStep)) != 0) return s;
-  const uint32_t done = lane.count - lane.left - lane.ramp_left;  // steps since the fold
+  const uint32_t done = steps_since_fold(lane);
   if (done == 0) return s;
   uint32_t last = next;
   uint32_t interval = lane.interval;

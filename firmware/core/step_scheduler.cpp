@@ -38,28 +38,42 @@ T load(const T& x) {
   return *static_cast<const volatile T*>(&x);
 }
 
-// A lane's position, its move's steps and what per-step counters would hold (StepLane,
-// lane_steps), read consistently: an interrupt between the reads either moves the lane's next
-// event or counts a fold, and has them read again.
+// `read(lane, next)` over a consistent state of lane `index` (StepLane): an interrupt between
+// the reads either moves the lane's next event or counts a fold, and has them read again.
+template <class Read>
+auto read_lane(const StepEngine& engine, uint8_t index, Read read) {
+  const StepLane& lane = engine.lanes[index];
+  for (;;) {
+    const uint32_t folds = load(lane.folds);
+    const uint32_t next = load(engine.next[index]);
+    fence();
+    const auto out = read(lane, next);
+    fence();
+    if (load(lane.folds) == folds && load(engine.next[index]) == next) return out;
+  }
+}
+
+// A lane's steps since power-up (what a per-step counter would hold).
+uint32_t total_steps(const StepEngine& engine, uint8_t index) {
+  return read_lane(engine, index, [](const StepLane& lane, uint32_t) {
+    return lane.total + step_engine_detail::steps_since_fold(lane);
+  });
+}
+
+// A lane's position, its move's steps and what per-step counters would hold (lane_steps).
 struct LaneCounts {
   int32_t position;  // 1/256 step
   uint32_t fired;
   LaneSteps steps;
 };
 LaneCounts counts(const StepEngine& engine, uint8_t index) {
-  const StepLane& lane = engine.lanes[index];
-  for (;;) {
-    const uint32_t folds = load(lane.folds);
-    const uint32_t next = load(engine.next[index]);
-    fence();
+  return read_lane(engine, index, [](const StepLane& lane, uint32_t next) {
     const LaneSteps steps = step_engine_detail::lane_steps(lane, next);
     const uint32_t moved = (steps.total - lane.total_at) *
                            static_cast<uint32_t>(static_cast<int32_t>(lane.position_step));
     const uint32_t at = static_cast<uint32_t>(lane.position_at);
-    const LaneCounts out{static_cast<int32_t>(at + moved), steps.total - lane.fired_from, steps};
-    fence();
-    if (load(lane.folds) == folds && load(engine.next[index]) == next) return out;
-  }
+    return LaneCounts{static_cast<int32_t>(at + moved), steps.total - lane.fired_from, steps};
+  });
 }
 
 Ticks later(Ticks a, Ticks b) { return a > b ? a : b; }
@@ -274,7 +288,7 @@ void StepScheduler::produce(uint8_t index) {
   if (mo.active == kNoSlot) return;  // no plan: nothing to produce (and no division)
   bool pushed = false;
   const uint32_t allowed = steps_ahead_allowed(mo);
-  uint32_t ahead = mo.pushed - counts(engine_, index).steps.total;
+  uint32_t ahead = mo.pushed - total_steps(engine_, index);
   if (ahead >= 2 && ahead > allowed / 2) return;
   while (mo.active != kNoSlot && space(index) >= kPushRoom && ahead < allowed) {
     if (mo.next_slot != kNoSlot && mo.planned >= mo.switch_at) {  // the replacement's turn
@@ -615,7 +629,7 @@ bool StepScheduler::set_position(uint8_t motor, int32_t position) {
   if (!is_motor(motor) || is_running(motor)) return false;
   StepLane& lane = engine_.lanes[motor - 1];
   // At rest the interrupt neither steps nor folds this lane.
-  *static_cast<volatile uint32_t*>(&lane.total_at) = counts(engine_, motor - 1).steps.total;
+  *static_cast<volatile uint32_t*>(&lane.total_at) = total_steps(engine_, motor - 1);
   *static_cast<volatile int32_t*>(&lane.position_at) = position;
   motors_[motor - 1].pushed_position = position;
   return true;
