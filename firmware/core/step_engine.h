@@ -96,11 +96,13 @@ inline constexpr uint8_t kSegRamp = 64;
 // The longest time between two events: beyond it the main loop adds events without a step, so
 // a signed 32-bit difference always orders two pending times.
 inline constexpr uint32_t kMaxSegmentTicks = uint32_t{1} << 30;
+// A segment of this many events never ends (an endless cruise).
+inline constexpr uint32_t kEndlessEvents = 0xFFFFFFFFu;
 inline constexpr uint8_t kRingSize = 32;  // a power of two
 
 struct StepSegment {
   uint32_t interval;      // ticks after the previous event (kSegStart: the first event's time)
-  uint32_t count;         // events, ≥ 1; 0 with kSegEnd (an endless cruise is pushed in runs)
+  uint32_t count;         // events, ≥ 1 (kEndlessEvents: endless); 0 with kSegEnd
   // kSegStart, kSegMove: position change per step (1/256 step, signed). kSegRamp: the
   // accumulator's fraction after the previous step (Q0.16, its bits).
   int16_t position_step;
@@ -128,23 +130,16 @@ struct StepLane {
   uint32_t ramp_left;
   int32_t add;
   uint32_t fraction;
-  // An event counts only `left` (and a ramp step `ramp_left`). The steps since power-up, the
-  // last step's time and the interval before it are derived where they are read (lane_steps):
-  // count − left − ramp_left steps since the last fold, and these three hold the values at the
-  // fold. load_segment and a halt fold (fold_steps: count 0); a plain segment after a plain
-  // one, taken in advance(), adds its events to `count` instead.
-  uint32_t count;          // events since the last fold, the playing segment's included
-  uint32_t total;          // steps since power-up at the last fold (wraps)
-  uint32_t last_step;      // time of the last step then
-  uint32_t last_interval;  // between the last two steps then, 0 at rest
-  // The position (1/256 step) is position_at + (total − total_at) × position_step, the current
-  // move's steps total − fired_from (total as lane_steps derives it). A segment that changes
-  // position_step folds the steps so far into position_at first.
+  uint32_t total;        // steps since power-up (wraps)
+  uint32_t last_step;    // time of the last step
+  uint32_t last_interval;  // between the last two steps, 0 at rest
+  // A step counts only `total`: the position (1/256 step) is position_at + (total − total_at) ×
+  // position_step, the current move's steps total − fired_from. A segment that changes
+  // position_step folds the steps so far into position_at first and counts a fold, so the main
+  // loop reads a consistent set by reading `folds` before and after (StepScheduler::counts).
   int32_t position_at;
   uint32_t total_at;
   uint32_t fired_from;
-  // Folds so far: the main loop reads a consistent set by reading `folds` and the lane's next
-  // event (which every event moves) before and after (StepScheduler's lane_snapshot).
   uint32_t folds;
   uint32_t finished;       // motions ended so far
   uint32_t halts;          // halts taken (one may have dropped a DIR change)
@@ -191,64 +186,6 @@ HMC_STEP_INLINE void fold_position(StepLane& lane, int16_t position_step) {
   lane.position_at = static_cast<int32_t>(at + (total - lane.total_at) * step);
   lane.total_at = total;
   lane.position_step = position_step;
-}
-
-// A ramp segment's state one event back: the interval and fraction before the step that made
-// the event, and that event's ticks after the one before it (ramp_step undone; the fraction
-// before is the one whose sum with the interval leaves the fraction after).
-HMC_STEP_INLINE uint32_t ramp_back(uint32_t& fraction, uint32_t& interval, uint32_t add) {
-  interval -= add;
-  fraction = (fraction - interval) & 0xFFFFu;
-  return (fraction + interval) >> 16;
-}
-
-// What per-step counters would hold (StepLane): steps since power-up, the last step's time and
-// the interval between the last two steps.
-struct LaneSteps {
-  uint32_t total;
-  uint32_t last_step;
-  uint32_t last_interval;
-};
-
-// Steps since the last fold.
-HMC_STEP_INLINE uint32_t steps_since_fold(const StepLane& lane) {
-  if ((lane.flags & (kSegDir | kSegNoStep)) != 0) return 0;
-  return lane.count - lane.left - lane.ramp_left;
-}
-
-// Derives them from the lane and its next event `next` (the last event's time once the segment
-// has played out: left 0).
-HMC_STEP_INLINE LaneSteps lane_steps(const StepLane& lane, uint32_t next) {
-  LaneSteps s{lane.total, lane.last_step, lane.last_interval};
-  const uint32_t done = steps_since_fold(lane);
-  if (done == 0) return s;
-  uint32_t last = next;
-  uint32_t interval = lane.interval;
-  if ((lane.flags & kSegRamp) != 0) {
-    uint32_t fraction = lane.fraction;
-    const uint32_t add = static_cast<uint32_t>(lane.add);
-    if (lane.left != 0) last -= ramp_back(fraction, interval, add);
-    interval = ramp_back(fraction, interval, add);
-  } else if (lane.left != 0) {
-    last -= interval;
-  }
-  s.total += done;
-  s.last_step = last;
-  // The first step since the fold follows the last one before it (after a wait, a DIR change,
-  // the start); a later one follows a step of the same segment (or of the plain one before).
-  s.last_interval = done == 1 ? last - lane.last_step : interval;
-  return s;
-}
-
-// The playing segment's steps go into the lane's counts (`next` as lane_steps takes it).
-HMC_STEP_INLINE void fold_steps(StepLane& lane, uint32_t next) {
-  const LaneSteps s = lane_steps(lane, next);
-  lane.total = s.total;
-  lane.last_step = s.last_step;
-  lane.last_interval = s.last_interval;
-  lane.count = 0;
-  lane.left = 0;
-  lane.ramp_left = 0;
   ++lane.folds;
 }
 
@@ -277,7 +214,6 @@ HMC_STEP_INLINE void begin_ramp(StepEngine& e, uint8_t i, StepLane& lane, const 
 HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
   StepLane& lane = e.lanes[i];
   const uint8_t bit = uint8_t(1u << i);
-  fold_steps(lane, e.next[i]);
   for (;;) {
     const uint8_t head = lane.head;
     if (head == load8(lane.tail)) {
@@ -309,7 +245,6 @@ HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
       store8(lane.head, static_cast<uint8_t>(head + 1));
       continue;
     } else if ((flags & kSegRamp) != 0) {
-      lane.count = seg.count;
       begin_ramp(e, i, lane, seg, e.next[i]);
       lane.flags = flags;
       e.armed = uint8_t(e.armed | bit);
@@ -325,8 +260,8 @@ HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
       }
     }
     lane.interval = seg.interval;
-    lane.count = seg.count;
     lane.left = seg.count;
+    lane.ramp_left = 0;
     lane.flags = flags;
     e.armed = uint8_t(e.armed | bit);
     if ((flags & (kSegDir | kSegNoStep)) == 0) {
@@ -340,9 +275,8 @@ HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
   }
 }
 
-// The main loop's requests: halts first, then motors waiting for their ring. Called on the
-// interrupt's slow entry only: out of line, so its registers are not the fast path's.
-HMC_STEP_RAMFUNC inline void take_requests(StepEngine& e) {
+// The main loop's requests: halts first, then motors waiting for their ring.
+inline void take_requests(StepEngine& e) {
   for (uint8_t i = 0; i < 3; ++i) {
     StepLane& lane = e.lanes[i];
     const uint8_t bit = uint8_t(1u << i);
@@ -351,7 +285,6 @@ HMC_STEP_RAMFUNC inline void take_requests(StepEngine& e) {
       store8(lane.halt_request, 0);
       const uint8_t upto = load8(lane.halt_upto);
       if (static_cast<uint8_t>(upto - lane.head) <= kRingSize) store8(lane.head, upto);
-      fold_steps(lane, e.next[i]);  // before the rest: a halted lane's last interval is 0
       const uint8_t end = halt & 0x7Fu;
       if (lane.moving != 0 && end != 0) {
         lane.end = end;
@@ -360,6 +293,7 @@ HMC_STEP_RAMFUNC inline void take_requests(StepEngine& e) {
       lane.moving = 0;
       e.armed = uint8_t(e.armed & ~bit);
       lane.last_interval = 0;
+      lane.ramp_left = 0;
       ++lane.halts;
     }
     if ((e.armed & bit) == 0) load_segment(e, i);
@@ -367,10 +301,15 @@ HMC_STEP_RAMFUNC inline void take_requests(StepEngine& e) {
 }
 
 // Lane i's due event is done (STEP raised if it steps): account for it, take the next.
-HMC_STEP_INLINE void advance(StepEngine& e, uint8_t i) {
+HMC_STEP_INLINE void advance(StepEngine& e, uint8_t i, uint8_t bit) {
   StepLane& lane = *based(&e.lanes[i]);
   const uint32_t at = e.next[i];
-  if (HMC_STEP_UNLIKELY(--lane.left == 0)) {
+  if (HMC_STEP_LIKELY((e.stepping & bit) != 0)) {
+    ++lane.total;
+    lane.last_interval = at - lane.last_step;
+    lane.last_step = at;
+  }
+  if (HMC_STEP_UNLIKELY(lane.left != kEndlessEvents && --lane.left == 0)) {
     if (lane.ramp_left != 0) {  // a ramp segment's next step
       --lane.ramp_left;
       ramp_step(e, i, lane, at);
@@ -382,13 +321,9 @@ HMC_STEP_INLINE void advance(StepEngine& e, uint8_t i) {
     if (lane.flags == 0 && head != load8(lane.tail)) {
       fence();
       const StepSegment& seg = lane.ring[head & (kRingSize - 1)];
-      // Not folded: `count` goes on counting, unless it would wrap (then count − left could
-      // read 0 steps after 2³² of them).
-      const uint32_t count = lane.count + seg.count;
-      if (seg.flags == 0 && count >= seg.count) {
+      if (seg.flags == 0) {
         e.next[i] = at + seg.interval;
         lane.interval = seg.interval;
-        lane.count = count;
         lane.left = seg.count;
         fence();
         store8(lane.head, static_cast<uint8_t>(head + 1));
@@ -413,7 +348,7 @@ HMC_STEP_INLINE void step_lanes(StepEngine& e, Port& port, uint8_t due) {
     if ((due & bit) == 0) continue;
     const uint8_t flags = e.lanes[i].flags;
     if (HMC_STEP_UNLIKELY((flags & kSegDir) != 0)) port.set_dir(i, (flags & kSegReverse) != 0);
-    advance(e, i);
+    advance(e, i, bit);
   }
 }
 

@@ -11,7 +11,6 @@ namespace {
 
 using hal::Ticks;
 using step_engine_detail::fence;
-using step_engine_detail::LaneSteps;
 using step_engine_detail::load8;
 using step_engine_detail::store8;
 
@@ -38,42 +37,22 @@ T load(const T& x) {
   return *static_cast<const volatile T*>(&x);
 }
 
-// `read(lane, next)` over a consistent state of lane `index` (StepLane): an interrupt between
-// the reads either moves the lane's next event or counts a fold, and has them read again.
-template <class Read>
-auto read_lane(const StepEngine& engine, uint8_t index, Read read) {
-  const StepLane& lane = engine.lanes[index];
-  for (;;) {
-    const uint32_t folds = load(lane.folds);
-    const uint32_t next = load(engine.next[index]);
-    fence();
-    const auto out = read(lane, next);
-    fence();
-    if (load(lane.folds) == folds && load(engine.next[index]) == next) return out;
-  }
-}
-
-// A lane's steps since power-up (what a per-step counter would hold).
-uint32_t total_steps(const StepEngine& engine, uint8_t index) {
-  return read_lane(engine, index, [](const StepLane& lane, uint32_t) {
-    return lane.total + step_engine_detail::steps_since_fold(lane);
-  });
-}
-
-// A lane's position, its move's steps and what per-step counters would hold (lane_steps).
+// A lane's position and its move's steps (StepLane): the interrupt counts only `total` a step;
+// a fold between the reads (counted in `folds`) has them read again.
 struct LaneCounts {
   int32_t position;  // 1/256 step
   uint32_t fired;
-  LaneSteps steps;
 };
-LaneCounts counts(const StepEngine& engine, uint8_t index) {
-  return read_lane(engine, index, [](const StepLane& lane, uint32_t next) {
-    const LaneSteps steps = step_engine_detail::lane_steps(lane, next);
-    const uint32_t moved = (steps.total - lane.total_at) *
-                           static_cast<uint32_t>(static_cast<int32_t>(lane.position_step));
-    const uint32_t at = static_cast<uint32_t>(lane.position_at);
-    return LaneCounts{static_cast<int32_t>(at + moved), steps.total - lane.fired_from, steps};
-  });
+LaneCounts counts(const StepLane& lane) {
+  for (;;) {
+    const uint32_t folds = load(lane.folds);
+    const uint32_t total = load(lane.total);
+    const uint32_t moved = (total - load(lane.total_at)) *
+                           static_cast<uint32_t>(static_cast<int32_t>(load(lane.position_step)));
+    const uint32_t at = static_cast<uint32_t>(load(lane.position_at));
+    const LaneCounts out{static_cast<int32_t>(at + moved), total - load(lane.fired_from)};
+    if (load(lane.folds) == folds) return out;
+  }
 }
 
 Ticks later(Ticks a, Ticks b) { return a > b ? a : b; }
@@ -151,12 +130,11 @@ StepStatus StepScheduler::plan_and_post(uint8_t motor, const MoveSpec* move) {
     mo.then_slot = kNoSlot;
     mo.dir_known = false;  // the halt may drop a DIR change not yet made
     // The halt is taken before any event after `now`: the steps so far are all there will be.
-    const LaneCounts counted = counts(engine_, index);
-    mo.pushed_position = counted.position;
-    mo.pushed = counted.steps.total;
+    const StepLane& lane = engine_.lanes[index];
+    mo.pushed_position = counts(lane).position;
+    mo.pushed = load(lane.total);
     // (A start's anchor counts as its last step, and may still be ahead of `now`.)
-    const int32_t since_step =
-        static_cast<int32_t>(static_cast<uint32_t>(now) - counted.steps.last_step);
+    const int32_t since_step = static_cast<int32_t>(static_cast<uint32_t>(now) - load(lane.last_step));
     const int64_t last_rise = static_cast<int64_t>(now) - since_step;
     mo.last_rise = last_rise > 0 ? static_cast<Ticks>(last_rise) : 0;
     if (move != nullptr) {
@@ -174,9 +152,9 @@ StepStatus StepScheduler::plan_and_post(uint8_t motor, const MoveSpec* move) {
 
   // The handover step h: the step after the next one (the next one's time is fixed), plus the
   // steps the lead covers at the current interval; the ring never holds more than that.
-  const LaneSteps counted = counts(engine_, index).steps;
-  const int32_t into = static_cast<int32_t>(counted.total - mo.profile_base);
-  const uint32_t last_interval = counted.last_interval;
+  const StepLane& lane = engine_.lanes[index];
+  const int32_t into = static_cast<int32_t>(load(lane.total) - mo.profile_base);
+  const uint32_t last_interval = load(lane.last_interval);
   const uint32_t spacing = last_interval > kMinIntervalTicks ? last_interval : kMinIntervalTicks;
   uint32_t h = static_cast<uint32_t>(into > 0 ? into : 0) + 2 + lead_ / spacing;
   if (h < mo.planned) h = mo.planned;
@@ -228,9 +206,8 @@ void StepScheduler::sync(uint8_t index) {
   mo.next_slot = kNoSlot;
   mo.next_then = kNoSlot;
   mo.move_mark = false;
-  const LaneCounts counted = counts(engine_, index);
-  mo.pushed_position = counted.position;
-  mo.pushed = counted.steps.total;
+  mo.pushed_position = counts(lane).position;
+  mo.pushed = load(lane.total);
 }
 
 // Also the guard of a compare written too late to match (the interrupt delayed past its own
@@ -286,9 +263,10 @@ uint32_t StepScheduler::steps_ahead_allowed(Motor& mo) const {
 void StepScheduler::produce(uint8_t index) {
   Motor& mo = motors_[index];
   if (mo.active == kNoSlot) return;  // no plan: nothing to produce (and no division)
+  const StepLane& lane = engine_.lanes[index];
   bool pushed = false;
   const uint32_t allowed = steps_ahead_allowed(mo);
-  uint32_t ahead = mo.pushed - total_steps(engine_, index);
+  uint32_t ahead = mo.pushed - load(lane.total);
   if (ahead >= 2 && ahead > allowed / 2) return;
   while (mo.active != kNoSlot && space(index) >= kPushRoom && ahead < allowed) {
     if (mo.next_slot != kNoSlot && mo.planned >= mo.switch_at) {  // the replacement's turn
@@ -629,7 +607,7 @@ bool StepScheduler::set_position(uint8_t motor, int32_t position) {
   if (!is_motor(motor) || is_running(motor)) return false;
   StepLane& lane = engine_.lanes[motor - 1];
   // At rest the interrupt neither steps nor folds this lane.
-  *static_cast<volatile uint32_t*>(&lane.total_at) = total_steps(engine_, motor - 1);
+  *static_cast<volatile uint32_t*>(&lane.total_at) = load(lane.total);
   *static_cast<volatile int32_t*>(&lane.position_at) = position;
   motors_[motor - 1].pushed_position = position;
   return true;
@@ -644,18 +622,19 @@ bool StepScheduler::is_running(uint8_t motor) const {
 }
 
 int32_t StepScheduler::position(uint8_t motor) const {
-  return is_motor(motor) ? counts(engine_, motor - 1).position : 0;
+  return is_motor(motor) ? counts(engine_.lanes[motor - 1]).position : 0;
 }
 
 uint32_t StepScheduler::steps_done(uint8_t motor) const {
-  return is_motor(motor) ? counts(engine_, motor - 1).fired : 0;
+  return is_motor(motor) ? counts(engine_.lanes[motor - 1]).fired : 0;
 }
 
 bool StepScheduler::target(uint8_t motor, int32_t& out) const {
   if (!is_motor(motor)) return false;
   const Motor& mo = motors_[motor - 1];
+  const StepLane& lane = engine_.lanes[motor - 1];
   if (!is_running(motor)) {
-    out = counts(engine_, motor - 1).position;
+    out = counts(lane).position;
     return true;
   }
   if (mo.active == kNoSlot) {
@@ -670,7 +649,7 @@ bool StepScheduler::target(uint8_t motor, int32_t& out) const {
 }
 
 uint32_t StepScheduler::interval(uint8_t motor) const {
-  return is_motor(motor) ? counts(engine_, motor - 1).steps.last_interval : 0;
+  return is_motor(motor) ? load(engine_.lanes[motor - 1].last_interval) : 0;
 }
 
 uint32_t StepScheduler::rate(uint8_t motor) const {
