@@ -219,9 +219,16 @@ void StepScheduler::fill() {
   bool have_now = false;
   uint32_t now = 0;
   for (uint8_t index = 0; index < kMotors; ++index) {
-    sync(index);
-    produce(index);
+    const Motor& mo = motors_[index];
     const StepLane& lane = engine_.lanes[index];
+    // A plan whose ring still reaches past its refill point, with no halt since the last look,
+    // has nothing for sync() and produce() to do (they would find that out in ≈ 100 cycles).
+    const bool well_ahead = mo.active != kNoSlot && load(lane.halts) == mo.seen_halts &&
+                            static_cast<int32_t>(load(lane.total) - mo.refill_total) < 0;
+    if (!well_ahead) {
+      sync(index);
+      produce(index);
+    }
     if ((load8(engine_.armed) & (1u << index)) == 0) {
       if (load8(lane.head) != lane.tail) wake(index);
       continue;
@@ -260,6 +267,7 @@ uint32_t StepScheduler::steps_ahead_allowed(Motor& mo) const {
 
 // Tops the ring up to the steps allowed ahead once it has fallen to half of them, so a cruise
 // goes in as runs of many steps (a ramp, one segment a step, is held back by the ring's size).
+// Leaves in refill_total the lane's step count (StepLane::total) from which it has work again.
 void StepScheduler::produce(uint8_t index) {
   Motor& mo = motors_[index];
   if (mo.active == kNoSlot) return;  // no plan: nothing to produce (and no division)
@@ -267,7 +275,9 @@ void StepScheduler::produce(uint8_t index) {
   bool pushed = false;
   const uint32_t allowed = steps_ahead_allowed(mo);
   uint32_t ahead = mo.pushed - load(lane.total);
-  if (ahead >= 2 && ahead > allowed / 2) return;
+  // (allowed ≥ 2: more than allowed / 2 ahead is at least 1.)
+  mo.refill_total = mo.pushed - allowed / 2;
+  if (ahead > allowed / 2) return;
   while (mo.active != kNoSlot && space(index) >= kPushRoom && ahead < allowed) {
     if (mo.next_slot != kNoSlot && mo.planned >= mo.switch_at) {  // the replacement's turn
       mo.then_slot = mo.next_then;
@@ -327,6 +337,7 @@ void StepScheduler::produce(uint8_t index) {
     mo.rise_ok_at = mo.last_rise + kStepHighTicks + kStepLowTicks;
     pushed = true;
   }
+  mo.refill_total = mo.pushed - steps_ahead_allowed(mo) / 2;
   if (pushed && (load8(engine_.armed) & (1u << index)) == 0) wake(index);
 }
 

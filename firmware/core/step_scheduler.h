@@ -145,6 +145,7 @@ class StepScheduler {
     uint32_t profile_base;  // `pushed` when the active profile began
     uint32_t switch_at;     // with a next_slot: the active profile's last step before it
     uint32_t seen_halts;    // StepLane::halts when DIR was last known
+    uint32_t refill_total;  // StepLane::total at which produce() has steps to push again
     int32_t pushed_position;  // the position after every step pushed
     PhaseKind kind;
     uint8_t phase;
