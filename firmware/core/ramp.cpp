@@ -51,6 +51,18 @@ uint32_t sqrt_fraction_q16(uint32_t root, uint32_t rest) {
   const uint32_t divisor = 4 * root + 1;
   uint32_t rem = 2 * rest;  // ≤ 4·root < divisor
   uint32_t quotient = 0;
+  if (divisor < (uint32_t{1} << 31)) {  // the doubled remainder fits: plain long division
+#pragma GCC unroll 16
+    for (int bit = 0; bit < 16; ++bit) {
+      rem <<= 1;
+      quotient <<= 1;
+      if (rem >= divisor) {
+        rem -= divisor;
+        quotient |= 1;
+      }
+    }
+    return quotient;
+  }
   for (int bit = 0; bit < 16; ++bit) {
     quotient <<= 1;
     if (rem >= divisor - rem) {
