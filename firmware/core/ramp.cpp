@@ -206,7 +206,7 @@ uint64_t ramp_segment_reach(uint64_t x_lo) {
     }
     bit >>= 2;
   }
-  return step_math::mul_u32(x * root, x) * 83;
+  return step_math::mul_u32(x * root, 83 * x);  // 83·x < 2²⁷: no 64-bit multiply
 }
 
 bool ramp_segment_fits(uint32_t n, uint64_t x_lo, uint32_t kappa) {
