@@ -300,8 +300,14 @@ void Controller::abort_self_test() {
 // Phase 1 runs every motor forward; when all rest, phase 2 brings each back as far as it went.
 void Controller::advance_self_test() {
   if (self_test_phase_ == 0) return;
+  // A motor at rest whose end check_motions() has not seen yet (the interrupt took the end
+  // marker after that check read `finished`) waits for the next poll, which sees it while the
+  // motor is still in the self-test: otherwise that end would be reported as an EVD of its own.
+  // (The interrupt counts `finished` before it marks the lane at rest, so read after.)
   for (uint8_t motor = 1; motor <= proto::kMotorCount; ++motor) {
-    if (motors_[index(motor)].state == MotorState::kSelfTest && scheduler_.is_running(motor)) return;
+    const Motor& mo = motors_[index(motor)];
+    if (mo.state != MotorState::kSelfTest) continue;
+    if (scheduler_.is_running(motor) || scheduler_.finished(motor) != mo.seen_finished) return;
   }
   const bool back = self_test_phase_ == 1;
   self_test_phase_ = 0;
