@@ -189,7 +189,7 @@ void begin(const MoveSpec& spec, uint64_t m_entry, Profile& out) {
 }  // namespace
 
 uint64_t ramp_segment_reach(uint64_t x_lo) {
-  // Beyond 2²⁰ steps from rest every n ≤ 256 fits: n³·κ < 2²⁴·2²⁷ ≤ 83·2⁵⁰.
+  // Beyond 2²⁰ steps from rest every n ≤ 256 fits: n³·κ < 2²⁴·2²⁷ ≤ 124·2⁵⁰.
   if (x_lo >= (uint64_t{1} << 20)) return ~uint64_t{0};
   // 32-bit from here: x < 2²⁰, x·⌊√x⌋ < 2³⁰.
   const auto x = static_cast<uint32_t>(x_lo);
@@ -206,7 +206,7 @@ uint64_t ramp_segment_reach(uint64_t x_lo) {
     }
     bit >>= 2;
   }
-  return step_math::mul_u32(x * root, 83 * x);  // 83·x < 2²⁷: no 64-bit multiply
+  return step_math::mul_u32(x * root, 124 * x);  // 124·x < 2²⁷: no 64-bit multiply
 }
 
 bool ramp_segment_fits(uint32_t n, uint64_t x_lo, uint32_t kappa) {

@@ -270,7 +270,7 @@ uint64_t k_of(uint64_t accel) { return (2 * 48000000ull * 48000000ull + accel / 
 
 }  // namespace
 
-TEST_CASE("ramp segments the bound allows stay within a quarter tick and a bit of the ideal") {
+TEST_CASE("ramp segments the bound allows stay within 3/8 tick and a bit of the ideal") {
   std::mt19937_64 rng(6);
   int played = 0;
   long double worst = 0;
@@ -286,7 +286,7 @@ TEST_CASE("ramp segments the bound allows stay within a quarter tick and a bit o
     if (error < 0) continue;  // intervals beyond the interrupt's range: pushed one by one
     ++played;
     worst = std::max(worst, error);
-    REQUIRE(error <= 0.25L + 0.07L);
+    REQUIRE(error <= 0.375L + 0.07L);
   }
   CHECK(played > 5000);
   std::printf("  ramp segments the bound allows (%d)           worst |A - X| %.4Lf ticks\n",
