@@ -462,25 +462,31 @@ bool StepScheduler::next_run(Motor& mo, uint32_t most, Ticks& first, uint32_t& c
   return true;
 }
 
-// X = τ + ½ (ramp.h, "Ramp segments") of the active sqrt phase where its M has the root
-// ⌊√M⌋ = root and M − root² = rest, in Q16 ticks from the last step pushed.
-int64_t StepScheduler::ideal_q16(const Motor& mo, uint32_t root, int64_t rest) const {
-  const int64_t sqrt_q16 = (static_cast<int64_t>(root) << 16) +
-                           ramp_math::sqrt_fraction_q16(root, static_cast<uint32_t>(rest));
+// X = τ + ½ (ramp.h, "Ramp segments") of the active sqrt phase is offset + √M accelerating and
+// offset − √M braking, in Q16 ticks from the last step pushed: the offset, once a segment.
+int64_t StepScheduler::ideal_offset_q16(const Motor& mo) const {
   const int64_t base = static_cast<int64_t>(mo.base - mo.last_rise) * 65536;
   const int64_t h = mo.g == 0 ? 0 : 65536 - static_cast<int64_t>(mo.g);
   // Up: step at floor(base + √M + h); down: base − floor(√M + h) = floor(base + 1 − h − √M).
-  return mo.kind == PhaseKind::kUp ? base + sqrt_q16 + h : base + 65536 - h - sqrt_q16;
+  return mo.kind == PhaseKind::kUp ? base + h : base + 65536 - h;
 }
 
-// ⌊√M⌋ of the active sqrt phase where its X (ideal_q16) would be x_q16, clamped to [0, 2³¹).
-uint32_t StepScheduler::root_guess(const Motor& mo, int64_t x_q16) const {
-  const int64_t base = static_cast<int64_t>(mo.base - mo.last_rise) * 65536;
-  const int64_t h = mo.g == 0 ? 0 : 65536 - static_cast<int64_t>(mo.g);
-  const int64_t sqrt_q16 = mo.kind == PhaseKind::kUp ? x_q16 - base - h : base + 65536 - h - x_q16;
-  const int64_t root = sqrt_q16 >> 16;
+namespace {
+
+// X where M has the root ⌊√M⌋ = root and M − root² = rest.
+int64_t ideal_q16(bool up, int64_t offset, uint32_t root, int64_t rest) {
+  const int64_t sqrt_q16 = (static_cast<int64_t>(root) << 16) +
+                           ramp_math::sqrt_fraction_q16(root, static_cast<uint32_t>(rest));
+  return up ? offset + sqrt_q16 : offset - sqrt_q16;
+}
+
+// ⌊√M⌋ where X would be x_q16, clamped to [0, 2³¹).
+uint32_t root_guess(bool up, int64_t offset, int64_t x_q16) {
+  const int64_t root = (up ? x_q16 - offset : offset - x_q16) >> 16;
   return root < 0 ? 0 : (root > 0x7FFFFFFF ? 0x7FFFFFFFu : static_cast<uint32_t>(root));
 }
+
+}  // namespace
 
 // Pushes the next steps of a sqrt phase as one ramp segment when they may be one: the longest
 // power of two the bound of ramp.h allows, within `most` and the phase. Gives its steps, 0 when
@@ -525,9 +531,10 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
   }
   // The accumulator before the segment: the interrupt's after a ramp segment, else the last
   // (exact) step's X.
+  const int64_t offset = ideal_offset_q16(mo);
   int64_t a0 = mo.fraction;
   if (!mo.after_ramp) {
-    a0 = ideal_q16(mo, mo.root, mo.rest);
+    a0 = ideal_q16(up, offset, mo.root, mo.rest);
     // The step rose at floor(X): the computed X (within e of it, ramp.h) can only cross that
     // tick by e.
     if (a0 < 0) a0 = 0;
@@ -547,8 +554,8 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
     const int64_t d = mo.next_interval;
     const int64_t s = mo.next_add;
     using step_math::shl;
-    root_mid = root_guess(mo, a0 + shl(d, shift) + shl(shl(s, shift) - s, shift) / 2);
-    root_end = root_guess(mo, a0 + shl(d, shift + 1) + shl(shl(s, shift + 1) - s, shift));
+    root_mid = root_guess(up, offset, a0 + shl(d, shift) + shl(shl(s, shift) - s, shift) / 2);
+    root_end = root_guess(up, offset, a0 + shl(d, shift + 1) + shl(shl(s, shift + 1) - s, shift));
   } else {
     const uint32_t change = half * mo.root_step;
     root_mid = up ? mo.root + change : (change < mo.root ? mo.root - change : 0);
@@ -556,10 +563,10 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
   }
   int64_t rest_mid = static_cast<int64_t>(m_mid - step_math::mul_u32(root_mid, root_mid));
   step_math::settle_root(m_mid, root_mid, rest_mid);
-  const int64_t x_mid = ideal_q16(mo, root_mid, rest_mid);
+  const int64_t x_mid = ideal_q16(up, offset, root_mid, rest_mid);
   int64_t rest_end = static_cast<int64_t>(m_end - step_math::mul_u32(root_end, root_end));
   step_math::settle_root(m_end, root_end, rest_end);
-  const int64_t x_end = ideal_q16(mo, root_end, rest_end);
+  const int64_t x_end = ideal_q16(up, offset, root_end, rest_end);
   RampSegment seg{};
   int64_t a_end = 0;
   if (!fit_ramp_segment(a0, x_mid, x_end, n, seg, a_end)) return 0;

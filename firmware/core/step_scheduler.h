@@ -170,8 +170,7 @@ class StepScheduler {
   void finish(uint8_t index);
   bool next_run(Motor& mo, uint32_t most, hal::Ticks& first, uint32_t& count);
   uint32_t push_ramp_segment(uint8_t index, uint32_t most);
-  int64_t ideal_q16(const Motor& mo, uint32_t root, int64_t rest) const;
-  uint32_t root_guess(const Motor& mo, int64_t x_q16) const;
+  int64_t ideal_offset_q16(const Motor& mo) const;
   void push(uint8_t index, const StepSegment& seg);
   uint8_t space(uint8_t index) const;
   uint32_t steps_ahead_allowed(Motor& mo) const;
