@@ -420,6 +420,7 @@ bool StepScheduler::next_run(Motor& mo, uint32_t most, Ticks& first, uint32_t& c
     mo.x = mo.k != 0 ? mo.m / mo.k : 0;  // once a phase: the segments' length test needs it
     mo.segment_steps = kMaxRampSegmentSteps;
     mo.fits_up_to = 0;
+    mo.refused_from = kMaxRampSegmentSteps + 1;
     mo.in_phase = false;
     mo.after_ramp = false;
   }
@@ -509,7 +510,8 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
     --shift;
   }
   if (n > limit) return 0;
-  // Accelerating, x only grows: a length the bound allowed earlier in the phase still fits.
+  // Accelerating, x only grows: a length the bound allowed earlier in the phase still fits;
+  // braking, x only shrinks: one it refused is refused again.
   uint64_t reach = 0;
   for (;;) {
     if (n == 2) {  // no interpolation: its points are its steps
@@ -523,8 +525,9 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
         mo.fits_up_to = n;
         break;
       }
-    } else if (mo.x >= n && ramp_segment_fits(n, mo.x - n, mo.kappa)) {
-      break;
+    } else if (n < mo.refused_from) {
+      if (mo.x >= n && ramp_segment_fits(n, mo.x - n, mo.kappa)) break;
+      mo.refused_from = n;
     }
     n >>= 1;
     --shift;

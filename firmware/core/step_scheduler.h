@@ -136,6 +136,7 @@ class StepScheduler {
     int64_t next_add;
     uint32_t segment_steps; // steps of the phase's last ramp segment (its first: 256)
     uint32_t fits_up_to;    // accelerating: the longest segment the bound allowed so far
+    uint32_t refused_from;  // braking: the shortest segment the bound refused so far
     uint32_t allowed;       // steps_ahead_allowed() for last_delta = allowed_for
     uint32_t allowed_for;
     uint32_t cruise_interval;
