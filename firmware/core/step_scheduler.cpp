@@ -582,7 +582,8 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
   mo.x = up ? mo.x + n : mo.x - n;
   mo.left -= n;
   // (n − 1)·add as a shift (n = 2^(shift + 1)).
-  const int64_t last = static_cast<int64_t>(seg.interval) + step_math::shl(seg.add, shift + 1) - seg.add;
+  const int64_t last =
+      static_cast<int64_t>(seg.interval) + step_math::shl(seg.add, shift + 1) - seg.add;
   mo.last_delta = static_cast<uint32_t>(last >> 16);
   mo.last_rise += static_cast<Ticks>(a_end >> 16);
   mo.fraction = static_cast<uint32_t>(a_end & 0xFFFF);
