@@ -51,6 +51,18 @@ uint32_t sqrt_fraction_q16(uint32_t root, uint32_t rest) {
   const uint32_t divisor = 4 * root + 1;
   uint32_t rem = 2 * rest;  // ≤ 4·root < divisor
   uint32_t quotient = 0;
+  if (divisor < (uint32_t{1} << 31)) {  // the doubled remainder fits: plain long division
+#pragma GCC unroll 16
+    for (int bit = 0; bit < 16; ++bit) {
+      rem <<= 1;
+      quotient <<= 1;
+      if (rem >= divisor) {
+        rem -= divisor;
+        quotient |= 1;
+      }
+    }
+    return quotient;
+  }
   for (int bit = 0; bit < 16; ++bit) {
     quotient <<= 1;
     if (rem >= divisor - rem) {
@@ -177,7 +189,7 @@ void begin(const MoveSpec& spec, uint64_t m_entry, Profile& out) {
 }  // namespace
 
 uint64_t ramp_segment_reach(uint64_t x_lo) {
-  // Beyond 2²⁰ steps from rest every n ≤ 256 fits: n³·κ < 2²⁴·2²⁷ ≤ 83·2⁵⁰.
+  // Beyond 2²⁰ steps from rest every n ≤ 256 fits: n³·κ < 2²⁴·2²⁷ ≤ 124·2⁵⁰.
   if (x_lo >= (uint64_t{1} << 20)) return ~uint64_t{0};
   // 32-bit from here: x < 2²⁰, x·⌊√x⌋ < 2³⁰.
   const auto x = static_cast<uint32_t>(x_lo);
@@ -194,7 +206,7 @@ uint64_t ramp_segment_reach(uint64_t x_lo) {
     }
     bit >>= 2;
   }
-  return step_math::mul_u32(x * root, x) * 83;
+  return step_math::mul_u32(x * root, 124 * x);  // 124·x < 2²⁷: no 64-bit multiply
 }
 
 bool ramp_segment_fits(uint32_t n, uint64_t x_lo, uint32_t kappa) {

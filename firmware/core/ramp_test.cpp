@@ -76,6 +76,31 @@ TEST_CASE("settle_root finds floor(sqrt) from any guess") {
   }
 }
 
+TEST_CASE("settle_root's 32-bit path: roots below 2^24, guesses whose rest is within 2^28") {
+  std::mt19937_64 rng(12);
+  for (int i = 0; i < 200000; ++i) {
+    const auto exact = static_cast<uint32_t>(rng() % (uint64_t{1} << (1 + rng() % 24)));
+    const uint64_t m = uint64_t{exact} * exact + rng() % (2ull * exact + 1);
+    // A guess whose rest lies within the narrow window, up to its edges.
+    const int64_t window = int64_t{1} << (rng() % 29);
+    int64_t rest = 0;
+    uint32_t guess = exact;
+    const int64_t stride = static_cast<int64_t>(rng() % 4096);
+    for (int64_t g = exact + (i % 2 == 0 ? stride : -stride); ; g += (i % 2 == 0 ? -1 : 1)) {
+      if (g < 0 || g >= (int64_t{1} << 24)) continue;
+      rest = static_cast<int64_t>(m) - g * g;
+      if (g == exact || (rest > -window && rest < window)) {
+        guess = static_cast<uint32_t>(g);
+        break;
+      }
+    }
+    uint32_t root = guess;
+    sm::settle_root(m, root, rest);
+    REQUIRE(root == reference_isqrt(m));
+    REQUIRE(rest == static_cast<int64_t>(m - uint64_t{root} * root));
+  }
+}
+
 TEST_CASE("rounds_up decides floor(sqrt(m) + h)") {
   std::mt19937_64 rng(3);
   for (int i = 0; i < 100000; ++i) {
@@ -245,7 +270,7 @@ uint64_t k_of(uint64_t accel) { return (2 * 48000000ull * 48000000ull + accel / 
 
 }  // namespace
 
-TEST_CASE("ramp segments the bound allows stay within a quarter tick and a bit of the ideal") {
+TEST_CASE("ramp segments the bound allows stay within 3/8 tick and a bit of the ideal") {
   std::mt19937_64 rng(6);
   int played = 0;
   long double worst = 0;
@@ -261,7 +286,7 @@ TEST_CASE("ramp segments the bound allows stay within a quarter tick and a bit o
     if (error < 0) continue;  // intervals beyond the interrupt's range: pushed one by one
     ++played;
     worst = std::max(worst, error);
-    REQUIRE(error <= 0.25L + 0.07L);
+    REQUIRE(error <= 0.375L + 0.07L);
   }
   CHECK(played > 5000);
   std::printf("  ramp segments the bound allows (%d)           worst |A - X| %.4Lf ticks\n",

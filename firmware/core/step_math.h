@@ -27,20 +27,22 @@ inline uint64_t mul_u32(uint32_t a, uint32_t b) {
 // when the guess is too high); on exit root = floor(√m) and rest = m − root², so 0 ≤ rest ≤ 2·root.
 // Gallops away from the guess by doubling strides, then halves the stride back: each pass keeps
 // p = 2·root·stride and q = stride², so moving the root by a stride changes rest by p ± q.
-inline void settle_root(uint64_t m, uint32_t& root, int64_t& rest) {
+// Rest is the signed type of `rest`, Wide the unsigned type of p and q.
+template <typename Rest, typename Wide>
+inline void settle_root_in(uint64_t m, uint32_t& root, Rest& rest) {
   uint32_t stride = 1;
-  uint64_t p = uint64_t{root} << 1;
-  uint64_t q = 1;
+  Wide p = Wide{root} << 1;
+  Wide q = 1;
   if (rest < 0) {
     // Too high: step down until (root − stride)² ≤ m; the root then lies in [root, root + stride).
     for (;;) {
       if (stride > root) {  // would pass zero: the root lies in [0, stride)
         root = 0;
-        rest = static_cast<int64_t>(m);
+        rest = static_cast<Rest>(m);
         p = 0;
         break;
       }
-      const int64_t lower = rest + static_cast<int64_t>(p - q);
+      const Rest lower = rest + static_cast<Rest>(p - q);
       root -= stride;
       rest = lower;
       p -= q << 1;
@@ -51,8 +53,8 @@ inline void settle_root(uint64_t m, uint32_t& root, int64_t& rest) {
     }
   } else {
     // Not too high: step up while (root + stride)² ≤ m; the root then lies in [root, root + stride).
-    while (rest >= static_cast<int64_t>(p + q)) {
-      rest -= static_cast<int64_t>(p + q);
+    while (static_cast<Wide>(rest) >= p + q) {
+      rest -= static_cast<Rest>(p + q);
       root += stride;
       p += q << 1;
       stride <<= 1;
@@ -60,16 +62,32 @@ inline void settle_root(uint64_t m, uint32_t& root, int64_t& rest) {
       q <<= 2;
     }
   }
+  // From here rest ≥ 0.
   while (stride > 1) {
     stride >>= 1;
     p >>= 1;
     q >>= 2;
-    if (rest >= static_cast<int64_t>(p + q)) {
-      rest -= static_cast<int64_t>(p + q);
+    if (static_cast<Wide>(rest) >= p + q) {
+      rest -= static_cast<Rest>(p + q);
       root += stride;
       p += q << 1;
     }
   }
+}
+
+// settle_root_in over the widths the guess needs: 32-bit when root < 2²⁴ and |rest| < 2²⁸
+// (the main loop's usual case: its guesses are a few ticks off). There the root moves by at most
+// |rest|/root (≤ 2¹⁴ when small), so p = 2·root·stride ≤ 4·|rest| + 2·root and q = stride² stay
+// below 2³¹, and m itself is below 2³⁰ when the root passes zero.
+inline void settle_root(uint64_t m, uint32_t& root, int64_t& rest) {
+  constexpr int64_t kNarrow = int64_t{1} << 28;
+  if (root < (uint32_t{1} << 24) && rest > -kNarrow && rest < kNarrow) {
+    auto narrow = static_cast<int32_t>(rest);
+    settle_root_in<int32_t, uint32_t>(m, root, narrow);
+    rest = narrow;
+    return;
+  }
+  settle_root_in<int64_t, uint64_t>(m, root, rest);
 }
 
 // v·2^s for either sign (a left shift of a negative value is undefined before C++20), s < 64.

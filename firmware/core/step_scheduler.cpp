@@ -219,9 +219,16 @@ void StepScheduler::fill() {
   bool have_now = false;
   uint32_t now = 0;
   for (uint8_t index = 0; index < kMotors; ++index) {
-    sync(index);
-    produce(index);
+    const Motor& mo = motors_[index];
     const StepLane& lane = engine_.lanes[index];
+    // A plan whose ring still reaches past its refill point, with no halt since the last look,
+    // has nothing for sync() and produce() to do (they would find that out in ≈ 100 cycles).
+    const bool well_ahead = mo.active != kNoSlot && load(lane.halts) == mo.seen_halts &&
+                            static_cast<int32_t>(load(lane.total) - mo.refill_total) < 0;
+    if (!well_ahead) {
+      sync(index);
+      produce(index);
+    }
     if ((load8(engine_.armed) & (1u << index)) == 0) {
       if (load8(lane.head) != lane.tail) wake(index);
       continue;
@@ -260,6 +267,7 @@ uint32_t StepScheduler::steps_ahead_allowed(Motor& mo) const {
 
 // Tops the ring up to the steps allowed ahead once it has fallen to half of them, so a cruise
 // goes in as runs of many steps (a ramp, one segment a step, is held back by the ring's size).
+// Leaves in refill_total the lane's step count (StepLane::total) from which it has work again.
 void StepScheduler::produce(uint8_t index) {
   Motor& mo = motors_[index];
   if (mo.active == kNoSlot) return;  // no plan: nothing to produce (and no division)
@@ -267,7 +275,9 @@ void StepScheduler::produce(uint8_t index) {
   bool pushed = false;
   const uint32_t allowed = steps_ahead_allowed(mo);
   uint32_t ahead = mo.pushed - load(lane.total);
-  if (ahead >= 2 && ahead > allowed / 2) return;
+  // (allowed ≥ 2: more than allowed / 2 ahead is at least 1.)
+  mo.refill_total = mo.pushed - allowed / 2;
+  if (ahead > allowed / 2) return;
   while (mo.active != kNoSlot && space(index) >= kPushRoom && ahead < allowed) {
     if (mo.next_slot != kNoSlot && mo.planned >= mo.switch_at) {  // the replacement's turn
       mo.then_slot = mo.next_then;
@@ -327,6 +337,7 @@ void StepScheduler::produce(uint8_t index) {
     mo.rise_ok_at = mo.last_rise + kStepHighTicks + kStepLowTicks;
     pushed = true;
   }
+  mo.refill_total = mo.pushed - steps_ahead_allowed(mo) / 2;
   if (pushed && (load8(engine_.armed) & (1u << index)) == 0) wake(index);
 }
 
@@ -409,6 +420,7 @@ bool StepScheduler::next_run(Motor& mo, uint32_t most, Ticks& first, uint32_t& c
     mo.x = mo.k != 0 ? mo.m / mo.k : 0;  // once a phase: the segments' length test needs it
     mo.segment_steps = kMaxRampSegmentSteps;
     mo.fits_up_to = 0;
+    mo.refused_from = kMaxRampSegmentSteps + 1;
     mo.in_phase = false;
     mo.after_ramp = false;
   }
@@ -451,25 +463,31 @@ bool StepScheduler::next_run(Motor& mo, uint32_t most, Ticks& first, uint32_t& c
   return true;
 }
 
-// X = τ + ½ (ramp.h, "Ramp segments") of the active sqrt phase where its M has the root
-// ⌊√M⌋ = root and M − root² = rest, in Q16 ticks from the last step pushed.
-int64_t StepScheduler::ideal_q16(const Motor& mo, uint32_t root, int64_t rest) const {
-  const int64_t sqrt_q16 = (static_cast<int64_t>(root) << 16) +
-                           ramp_math::sqrt_fraction_q16(root, static_cast<uint32_t>(rest));
+// X = τ + ½ (ramp.h, "Ramp segments") of the active sqrt phase is offset + √M accelerating and
+// offset − √M braking, in Q16 ticks from the last step pushed: the offset, once a segment.
+int64_t StepScheduler::ideal_offset_q16(const Motor& mo) const {
   const int64_t base = static_cast<int64_t>(mo.base - mo.last_rise) * 65536;
   const int64_t h = mo.g == 0 ? 0 : 65536 - static_cast<int64_t>(mo.g);
   // Up: step at floor(base + √M + h); down: base − floor(√M + h) = floor(base + 1 − h − √M).
-  return mo.kind == PhaseKind::kUp ? base + sqrt_q16 + h : base + 65536 - h - sqrt_q16;
+  return mo.kind == PhaseKind::kUp ? base + h : base + 65536 - h;
 }
 
-// ⌊√M⌋ of the active sqrt phase where its X (ideal_q16) would be x_q16, clamped to [0, 2³¹).
-uint32_t StepScheduler::root_guess(const Motor& mo, int64_t x_q16) const {
-  const int64_t base = static_cast<int64_t>(mo.base - mo.last_rise) * 65536;
-  const int64_t h = mo.g == 0 ? 0 : 65536 - static_cast<int64_t>(mo.g);
-  const int64_t sqrt_q16 = mo.kind == PhaseKind::kUp ? x_q16 - base - h : base + 65536 - h - x_q16;
-  const int64_t root = sqrt_q16 >> 16;
+namespace {
+
+// X where M has the root ⌊√M⌋ = root and M − root² = rest.
+int64_t ideal_q16(bool up, int64_t offset, uint32_t root, int64_t rest) {
+  const int64_t sqrt_q16 = (static_cast<int64_t>(root) << 16) +
+                           ramp_math::sqrt_fraction_q16(root, static_cast<uint32_t>(rest));
+  return up ? offset + sqrt_q16 : offset - sqrt_q16;
+}
+
+// ⌊√M⌋ where X would be x_q16, clamped to [0, 2³¹).
+uint32_t root_guess(bool up, int64_t offset, int64_t x_q16) {
+  const int64_t root = (up ? x_q16 - offset : offset - x_q16) >> 16;
   return root < 0 ? 0 : (root > 0x7FFFFFFF ? 0x7FFFFFFFu : static_cast<uint32_t>(root));
 }
+
+}  // namespace
 
 // Pushes the next steps of a sqrt phase as one ramp segment when they may be one: the longest
 // power of two the bound of ramp.h allows, within `most` and the phase. Gives its steps, 0 when
@@ -492,7 +510,8 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
     --shift;
   }
   if (n > limit) return 0;
-  // Accelerating, x only grows: a length the bound allowed earlier in the phase still fits.
+  // Accelerating, x only grows: a length the bound allowed earlier in the phase still fits;
+  // braking, x only shrinks: one it refused is refused again.
   uint64_t reach = 0;
   for (;;) {
     if (n == 2) {  // no interpolation: its points are its steps
@@ -506,17 +525,19 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
         mo.fits_up_to = n;
         break;
       }
-    } else if (mo.x >= n && ramp_segment_fits(n, mo.x - n, mo.kappa)) {
-      break;
+    } else if (n < mo.refused_from) {
+      if (mo.x >= n && ramp_segment_fits(n, mo.x - n, mo.kappa)) break;
+      mo.refused_from = n;
     }
     n >>= 1;
     --shift;
   }
   // The accumulator before the segment: the interrupt's after a ramp segment, else the last
   // (exact) step's X.
+  const int64_t offset = ideal_offset_q16(mo);
   int64_t a0 = mo.fraction;
   if (!mo.after_ramp) {
-    a0 = ideal_q16(mo, mo.root, mo.rest);
+    a0 = ideal_q16(up, offset, mo.root, mo.rest);
     // The step rose at floor(X): the computed X (within e of it, ramp.h) can only cross that
     // tick by e.
     if (a0 < 0) a0 = 0;
@@ -536,8 +557,8 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
     const int64_t d = mo.next_interval;
     const int64_t s = mo.next_add;
     using step_math::shl;
-    root_mid = root_guess(mo, a0 + shl(d, shift) + shl(shl(s, shift) - s, shift) / 2);
-    root_end = root_guess(mo, a0 + shl(d, shift + 1) + shl(shl(s, shift + 1) - s, shift));
+    root_mid = root_guess(up, offset, a0 + shl(d, shift) + shl(shl(s, shift) - s, shift) / 2);
+    root_end = root_guess(up, offset, a0 + shl(d, shift + 1) + shl(shl(s, shift + 1) - s, shift));
   } else {
     const uint32_t change = half * mo.root_step;
     root_mid = up ? mo.root + change : (change < mo.root ? mo.root - change : 0);
@@ -545,10 +566,10 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
   }
   int64_t rest_mid = static_cast<int64_t>(m_mid - step_math::mul_u32(root_mid, root_mid));
   step_math::settle_root(m_mid, root_mid, rest_mid);
-  const int64_t x_mid = ideal_q16(mo, root_mid, rest_mid);
+  const int64_t x_mid = ideal_q16(up, offset, root_mid, rest_mid);
   int64_t rest_end = static_cast<int64_t>(m_end - step_math::mul_u32(root_end, root_end));
   step_math::settle_root(m_end, root_end, rest_end);
-  const int64_t x_end = ideal_q16(mo, root_end, rest_end);
+  const int64_t x_end = ideal_q16(up, offset, root_end, rest_end);
   RampSegment seg{};
   int64_t a_end = 0;
   if (!fit_ramp_segment(a0, x_mid, x_end, n, seg, a_end)) return 0;
@@ -560,7 +581,9 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
   mo.root = root_end;
   mo.x = up ? mo.x + n : mo.x - n;
   mo.left -= n;
-  const int64_t last = static_cast<int64_t>(seg.interval) + static_cast<int64_t>(n - 1) * seg.add;
+  // (n − 1)·add as a shift (n = 2^(shift + 1)).
+  const int64_t last =
+      static_cast<int64_t>(seg.interval) + step_math::shl(seg.add, shift + 1) - seg.add;
   mo.last_delta = static_cast<uint32_t>(last >> 16);
   mo.last_rise += static_cast<Ticks>(a_end >> 16);
   mo.fraction = static_cast<uint32_t>(a_end & 0xFFFF);

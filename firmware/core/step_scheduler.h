@@ -137,6 +137,7 @@ class StepScheduler {
     int64_t next_add;
     uint32_t segment_steps; // steps of the phase's last ramp segment (its first: 256)
     uint32_t fits_up_to;    // accelerating: the longest segment the bound allowed so far
+    uint32_t refused_from;  // braking: the shortest segment the bound refused so far
     uint32_t allowed;       // steps_ahead_allowed() for last_delta = allowed_for
     uint32_t allowed_for;
     uint32_t cruise_interval;
@@ -146,6 +147,7 @@ class StepScheduler {
     uint32_t profile_base;  // `pushed` when the active profile began
     uint32_t switch_at;     // with a next_slot: the active profile's last step before it
     uint32_t seen_halts;    // StepLane::halts when DIR was last known
+    uint32_t refill_total;  // StepLane::total at which produce() has steps to push again
     int32_t pushed_position;  // the position after every step pushed
     PhaseKind kind;
     uint8_t phase;
@@ -170,8 +172,7 @@ class StepScheduler {
   void finish(uint8_t index);
   bool next_run(Motor& mo, uint32_t most, hal::Ticks& first, uint32_t& count);
   uint32_t push_ramp_segment(uint8_t index, uint32_t most);
-  int64_t ideal_q16(const Motor& mo, uint32_t root, int64_t rest) const;
-  uint32_t root_guess(const Motor& mo, int64_t x_q16) const;
+  int64_t ideal_offset_q16(const Motor& mo) const;
   void push(uint8_t index, const StepSegment& seg);
   uint8_t space(uint8_t index) const;
   uint32_t steps_ahead_allowed(Motor& mo) const;

@@ -26,8 +26,8 @@ namespace {
 constexpr Ticks kNever = ~Ticks{0};
 constexpr long double kF = 48000000.0L;
 // One tick: a step's time is the ideal rounded to the nearest tick, inside a ramp segment from a
-// quadratic within ¼ + 0.07 tick of it, plus the integer K and the 2⁻¹⁶ offsets (ramp.h derives
-// < 0.84; the test holds the contract).
+// quadratic within ⅜ + 0.07 tick of it, plus the integer K and the 2⁻¹⁶ offsets (ramp.h derives
+// < 0.96; the test holds the contract).
 constexpr long double kTolerance = 1.0L;
 
 struct Edge {
