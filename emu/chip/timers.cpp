@@ -133,6 +133,32 @@ void Tc::advance(uint64_t now_ps) {
   }
 }
 
+// 30.6.2.5: MCx is set when the counter equals CCx. A compare written by a DMAC beat that landed
+// at counter position `landed`, before the counter was last looked at: a value the counter
+// passed since the beat matched then, as on the chip, where the write takes effect when the
+// beat lands (the DMAC, 30.6.4.1, is handed that match with its own time).
+void Tc::match_since(uint64_t landed) {
+  const uint64_t m = modulus();
+  if (landed >= checked_position_) return;
+  for (unsigned c = 0; c < 2; ++c) {
+    const uint64_t value = cc_[c] % m;
+    const uint64_t first = landed + 1 + ((value + m - (landed + 1) % m) % m);
+    if (first > checked_position_) continue;
+    const uint8_t flag = static_cast<uint8_t>(kMc0 << c);
+    if ((flag & ~intflag_) != 0) {
+      intflag_ |= flag;
+      chip_.irq_changed();
+    }
+    if ((dma_watch_ & flag) != 0) {
+      // The match lies before the base the write just moved to now (rebase).
+      const uint64_t back = static_cast<uint64_t>(static_cast<Wide>(base_position_ - first) *
+                                                  Chip::kPsPerSecond / tick_hz());
+      const unsigned trigger = dma_trigger_base_ + 1 + c;
+      chip_.dmac().timer_trigger(&trigger, 1, first >= base_position_ ? ps_at_position(first) : base_ps_ - back);
+    }
+  }
+}
+
 uint64_t Tc::next_event_ps() const {
   const uint64_t hz = tick_hz();
   const uint8_t wanted = inten_ | dma_watch_;
@@ -232,6 +258,9 @@ void Tc::write(uint32_t offset, uint32_t value, unsigned size) {
     base_position_ = checked_position_ = w.get(0x10, mode32() ? 4 : 2);
   }
   if (touches(offset, size, 0x18, 8)) {
+    // A DMAC beat is served at the CPU's next block boundary but lands at its own time
+    // (chip.h, access_ps): the counter may have passed the value it writes since.
+    const uint64_t landed = position(chip_.access_ps());
     chip_.charge_stall(5, sync_hz);  // CCx writes synchronise (30.6.6)
     rebase();
     if (mode32()) {
@@ -245,6 +274,8 @@ void Tc::write(uint32_t offset, uint32_t value, unsigned size) {
     if (mfrq()) {
       base_position_ %= modulus();
       checked_position_ = base_position_;
+    } else {
+      match_since(landed);
     }
   }
   if (clock_id_ == kTc3ClockId) chip_.board().tone_source_changed();

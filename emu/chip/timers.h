@@ -37,6 +37,7 @@ class Tc : public Peripheral, public Timed {
   uint64_t modulus() const;  // count values per wrap
   uint64_t position(uint64_t now_ps) const;  // counts since the count was last set, plus it
   void rebase();
+  void match_since(uint64_t landed);
   void reset_registers();
   uint64_t ps_at_position(uint64_t position) const;
 

@@ -6,7 +6,9 @@
 # are the DMA's (firmware/targets/samd21/step_pulses.h): each high 2.0 us (kStepHighTicks; the
 # DRV8711 wants >= 1.9 us high and low) and rising exactly 100 us after the one before. Fails if
 # the DMA's clear did not come (a pulse too long or too short) or a rise came off its compare
-# (the CPU-made pulses before measured high 3.0-3.8 us and periods 98.4-101.5 us).
+# (the CPU-made pulses before measured high 3.0-3.8 us and periods 98.4-101.5 us). Then one motor
+# ramping toward 25 us: every pulse 2.0 us high there too (a pulse end the DMAC's beat set late,
+# once the counter had passed it, left STEP high until the next step's end: that step was lost).
 # Usage: step_timing_test.sh HMC_EMU IMAGE_DIR
 # Without the images the test is skipped (77), unless CI=true.
 set -uo pipefail
@@ -45,5 +47,18 @@ fi
 if ! awk -v a="$low_min" 'BEGIN { exit !(a >= 1900) }'; then echo "FAIL: STEP low $low_min ns < 1900"; exit 1; fi
 if ! awk -v a="$period_min" -v b="$period_max" 'BEGIN { exit !(a >= 99999 && b <= 100001) }'; then
   echo "FAIL: STEP rises $period_min-$period_max ns apart, expected 100 000 (each at its compare)"; exit 1
+fi
+
+exec 3< <(printf 'STX#4#SET#1#3#40000#68#ETX\nSTX#6#STM#1#1#256#0#25#27#ETX\n'; exec sleep 120 2>/dev/null)
+feeder=$!
+stats=$(timeout 100 "$emu" "$image" --fast --quiet --stats --measure-from 0.3 --max-time 1.2 <&3 2>&1 >/dev/null)
+kill "$feeder" 2>/dev/null
+exec 3<&-
+pulses=$(grep -o 'STEP 1: [0-9]* pulses, high [0-9.]*-[0-9.]* ns' <<<"$stats")
+echo "ramping: $pulses"
+read -r ramp_pulses high_min high_max < <(sed -E 's/.*: ([0-9]+) pulses, high ([0-9.]+)-([0-9.]+) ns/\1 \2 \3/' <<<"$pulses")
+if [[ -z $high_max ]] || ((ramp_pulses < 20000)); then echo "FAIL: no ramp of motor 1:"; echo "$stats"; exit 1; fi
+if ! awk -v a="$high_min" -v b="$high_max" 'BEGIN { exit !(a >= 1999 && b <= 2001) }'; then
+  echo "FAIL: ramping, STEP high $high_min-$high_max ns, expected 2000"; exit 1
 fi
 echo "ok"
