@@ -34,6 +34,8 @@ import subprocess
 import sys
 import tempfile
 
+import image_check
+
 SERVO_ANGLES = {1: [135, 10, 170], 2: [30]}
 TICKS_PER_US = 48
 PERIOD_TICKS = 20000 * TICKS_PER_US  # servo_pwm.h: 20 ms
@@ -188,9 +190,5 @@ def main(emu, image, sim, board_h):
 if __name__ == "__main__":
     if len(sys.argv) != 5:
         sys.exit(__doc__)
-    if not os.path.isfile(sys.argv[2]):
-        if os.environ.get("CI") == "true":
-            sys.exit(f"FAIL: no firmware image {sys.argv[2]} (build the firmware preset first)")
-        print(f"SKIP: no firmware image {sys.argv[2]}")
-        sys.exit(77)
+    image_check.require_image(sys.argv[2])
     sys.exit(main(*sys.argv[1:]))
