@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """hmc-emu's speed against real time (scripts/bench emu-speed; docs/emu.md, "Speed").
 
-Boots the real image with three motors at the step budget (STM at 40 us each: 75 000 steps/s
-summed), the frames on standard input kept open, once in --fast (2 s of virtual time) and once in
-real-time mode (5 s), and reports virtual seconds per CPU second and per wall second, with the
-machine's load average: real-time mode keeps up when its wall ratio is 1.00.
+Boots the real image with three motors at 40 us each (75 000 steps/s summed, the step budget
+when this bench was written), the frames on standard input kept open, once in --fast (2 s of
+virtual time) and once in real-time mode (5 s), and reports virtual seconds per CPU second and
+per wall second, with the machine's load average: real-time mode keeps up when its wall ratio
+is 1.00.
 
 Usage: speed.py HMC_EMU IMAGE
 """
@@ -43,7 +44,7 @@ def run(fast, seconds):
         sys.exit("emu-speed: no figures from hmc-emu:\n" + stderr)
     rate = sum(int(steps.group(i)) for i in (3, 4, 5)) / (float(steps.group(2)) - float(steps.group(1)))
     if rate < 74000:
-        sys.exit("emu-speed: the board made %.0f steps/s, not the budget's 75 000:\n%s" % (rate, stderr))
+        sys.exit("emu-speed: the board made %.0f steps/s, not the 75 000 asked for:\n%s" % (rate, stderr))
     cpu = usage.ru_utime + usage.ru_stime
     v, wall = float(virtual.group(1)), float(virtual.group(2))
     return {"virtual": v, "cpu": cpu, "wall": wall, "per_cpu": v / cpu, "per_wall": v / wall,

@@ -225,16 +225,18 @@ static_assert(kSettingHomeLocate == kSettingCount, "one SettingId per kSettings 
 // rounded up; it must also stay within the motor's max_rate setting.
 // The step budget, summed over the moving motors, from the real image's cycles in hmc-emu's
 // cycle model (docs/performance.md, "Cycles on the real image"; scripts/bench cycles). The rule:
-// the step interrupt uses at most half the 48 MHz CPU at the budget.
-//  - Constant rate: 301-322 cycles a step (one motor; three on their own grids); three motors at
-//    40 us (75 000 steps/s) measured 47.6 % of the CPU (50.3 % if every step cost 322, within
-//    the model's error bound). The spec's three 20 us moves at once (150 000) would need 93 %.
-//  - Ramping: the interrupt's 377-394 cycles a step plus the main loop's fill(), which computes
-//    each ramp step's time: 464-664 cycles a ramp step (median, hmc-emu-bench --cycles; flash
-//    wait states not counted): ≈ 1 050 a step, 88 % of the CPU at 40 000. Not raised.
-// VER reports the first as max_rate.
-inline constexpr uint32_t kMaxStepRate = 75000;
-inline constexpr uint32_t kMaxRampingStepRate = 40000;  // when any moving motor ramps
+// the step interrupt uses at most half the 48 MHz CPU at the budget (24 000 000 cycles a second).
+//  - Constant rate: STEP pulses made by the DMA, 204-219 cycles a step (one motor; three on
+//    their own grids), 212 with three at 40 us: half the CPU allows 109 000-113 000 steps/s.
+//    100 000 takes two of the spec's 20 us moves at once; the third is refused (three at 20 us,
+//    150 000 steps/s, measured 197 cycles a step: 61.6 % of the CPU).
+//  - Ramping: the interrupt's 219-238 cycles a ramping step (at most 100 000 by the rule) and
+//    the main loop's fill(), 116-240 cycles a ramping step with ramp segments (with cruise; pure
+//    triangles): at 80 000 at most 40 % and 19-40 % of the CPU, the rest for the parser, replies
+//    and LEDs.
+// VER reports both (max_rate, max_ramping_rate).
+inline constexpr uint32_t kMaxStepRate = 100000;
+inline constexpr uint32_t kMaxRampingStepRate = 80000;  // when any moving motor ramps
 // The step timer's shortest and longest interval at 48 ticks a µs: 240 ticks, 2^32 - 1 ticks.
 inline constexpr uint32_t kShortestDelayUs = 5;
 inline constexpr uint32_t kLongestDelayUs = 89478485;

@@ -18,6 +18,8 @@ using hmc::Command;
 using hmc::LedColor;
 using hmc::SetSetting;
 using hmc::StepperMove;
+using hmc::StepBudgets;
+namespace proto = hmc::proto;
 
 MotorConfig motor(const std::string& name, uint32_t number, uint32_t microstep = 16) {
   MotorConfig c;
@@ -420,27 +422,48 @@ TEST_CASE("positions: an absolute move needs a known position; soft limits") {
 }
 
 TEST_CASE("the board's rate budget") {
-  // 30 000 + 30 000 + 30 000 steps/s at once: above 75 000.
-  auto r = plan_motion(file({step(TogetherStep{{move("pan", 3000, constant(30000)), move("tilt", 3000, constant(30000)),
-                                                move("lift", 3000, constant(30000))}},
-                                  4)},
-                            {motor("pan", 1), motor("tilt", 2), motor("lift", 3)}),
-                       {});
+  const std::vector<MotorConfig> three = {motor("pan", 1), motor("tilt", 2), motor("lift", 3)};
+  // Motors started one after the other without waiting, each running 1 s (steps = rate).
+  const auto running = [&](std::vector<std::pair<double, bool>> rates) {
+    const char* names[] = {"pan", "tilt", "lift"};
+    std::vector<Step> steps;
+    for (size_t i = 0; i < rates.size(); ++i) {
+      const auto [rate, ramps] = rates[i];
+      steps.push_back(move_step(move(names[i], rate, ramps ? trapezoid(rate, 400000) : constant(rate)),
+                                static_cast<uint32_t>(i + 1), i + 1 == rates.size()));
+    }
+    return file(steps, three);
+  };
+  // This firmware (protocol_facts.h: 100 000 steps/s, 80 000 while any moving motor ramps):
+  // two motors at the spec's fastest, 20 us a step (50 000 steps/s each), fit; a third does not.
+  CHECK(plan_motion(running({{50000, false}, {50000, false}}), {}).ok());
+  auto r = plan_motion(running({{50000, false}, {50000, false}, {50000, false}}), {});
   REQUIRE(!r.ok());
-  CHECK(r.error()[0].where.line == 4);
-  CHECK(r.error()[0].message.find("75000") != std::string::npos);
+  CHECK(r.error()[0].message.find(std::to_string(proto::kMaxStepRate)) != std::string::npos);
+  // 40 000 + 40 000 at constant rate and a third motor ramping to 1 000: 81 000 is within the
+  // constant-rate budget but not within the ramping one; 40 000 + 25 000 + 1 000 is.
+  r = plan_motion(running({{40000, false}, {40000, false}, {1000, true}}), {});
+  REQUIRE(!r.ok());
+  CHECK(r.error()[0].message.find(std::to_string(proto::kMaxRampingStepRate)) != std::string::npos);
+  CHECK(plan_motion(running({{40000, false}, {25000, false}, {1000, true}}), {}).ok());
+
+  // A board of the firmware before (VER: 75 000, 40 000 while ramping) is held to its own.
+  PlanOptions older;
+  older.budgets = StepBudgets{75000, 40000};
   // One motor ramping on the board at 45 000: above the 40 000 allowed while ramping.
-  r = plan_motion(file({move_step(move("pan", 60000, trapezoid(45000, 400000)), 2)}), {});
+  r = plan_motion(file({move_step(move("pan", 60000, trapezoid(45000, 400000)), 2)}), older);
   REQUIRE(!r.ok());
   CHECK(r.error()[0].message.find("40000") != std::string::npos);
   // ... which the seed's staircase at constant rates may do.
-  CHECK(plan_motion(file({move_step(move("pan", 60000, trapezoid(45000, 400000)))}), seed()).ok());
+  PlanOptions seed_board = seed();
+  seed_board.budgets = older.budgets;
+  CHECK(plan_motion(file({move_step(move("pan", 60000, trapezoid(45000, 400000)))}), seed_board).ok());
   // A motor still running from a move that did not wait counts too.
   r = plan_motion(file({move_step(move("pan", 30000, constant(30000)), 1, false),
                         move_step(move("tilt", 30000, constant(30000)), 2, false),
                         move_step(move("lift", 30000, constant(30000)), 3)},
-                       {motor("pan", 1), motor("tilt", 2), motor("lift", 3)}),
-                  {});
+                       three),
+                  older);
   REQUIRE(!r.ok());
   CHECK(r.error()[0].where.line >= 2);  // all three start together: the check names a later one
   CHECK(r.error()[0].message.find("75000") != std::string::npos);
@@ -449,10 +472,10 @@ TEST_CASE("the board's rate budget") {
   REQUIRE(!r.ok());
   for (const auto& e : r.error()) WARN(e.where.line << ": " << e.message);
   CHECK(r.error()[0].where.line == 3);
-  // 25 000 + 25 000 at once fits exactly.
+  // 25 000 + 25 000 at once fits that board.
   CHECK(plan_motion(file({move_step(move("pan", 3000, constant(25000)), 1, false),
                           move_step(move("tilt", 3000, constant(25000)), 2)}),
-                    {})
+                    older)
             .ok());
 }
 
