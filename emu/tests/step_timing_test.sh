@@ -17,12 +17,17 @@ image=$(realpath -m "$2")/hmc-firmware.elf
 # shellcheck source=SCRIPTDIR/../../cli/sim_test_lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/../../cli/sim_test_lib.sh"
 require_built "$image"
-# Standard input stays open until --max-time ends the run (at its end hmc-emu would stop early).
-exec 3< <(printf 'STX#4#SET#1#3#0#4#ETX\nSTX#6#STM#1#1#256#0#100#102#ETX\n'; exec sleep 120 2>/dev/null)
-feeder=$!
-stats=$(timeout 100 "$emu" "$image" --fast --quiet --stats --measure-from 0.3 --max-time 0.8 <&3 2>&1 >/dev/null)
-kill "$feeder" 2>/dev/null
-exec 3<&-
+# run_stats LINES MAX_TIME: hmc-emu's --stats from 0.3 s to MAX_TIME with LINES on its standard
+# input, which stays open until --max-time ends the run (at its end hmc-emu would stop early).
+run_stats() {
+  local feeder
+  exec 3< <(printf '%s' "$1"; exec sleep 120 2>/dev/null)
+  feeder=$!
+  timeout 100 "$emu" "$image" --fast --quiet --stats --measure-from 0.3 --max-time "$2" <&3 2>&1 >/dev/null
+  kill "$feeder" 2>/dev/null
+  exec 3<&-
+}
+stats=$(run_stats $'STX#4#SET#1#3#0#4#ETX\nSTX#6#STM#1#1#256#0#100#102#ETX\n' 0.8)
 window=$(grep -o 'steps [0-9]* [0-9]* [0-9]*' <<<"$stats")
 entries=$(grep -o 'exception 35: [0-9]* entries' <<<"$stats" | grep -o '[0-9]* entries' | grep -o '[0-9]*')
 per_entry=$(grep -o 'exception 35: [0-9]* entries, [0-9.]* cycles each' <<<"$stats" | grep -o '[0-9.]* cycles each' | grep -o '^[0-9]*')
@@ -49,11 +54,7 @@ if ! awk -v a="$period_min" -v b="$period_max" 'BEGIN { exit !(a >= 99999 && b <
   echo "FAIL: STEP rises $period_min-$period_max ns apart, expected 100 000 (each at its compare)"; exit 1
 fi
 
-exec 3< <(printf 'STX#4#SET#1#3#40000#68#ETX\nSTX#6#STM#1#1#256#0#25#27#ETX\n'; exec sleep 120 2>/dev/null)
-feeder=$!
-stats=$(timeout 100 "$emu" "$image" --fast --quiet --stats --measure-from 0.3 --max-time 1.2 <&3 2>&1 >/dev/null)
-kill "$feeder" 2>/dev/null
-exec 3<&-
+stats=$(run_stats $'STX#4#SET#1#3#40000#68#ETX\nSTX#6#STM#1#1#256#0#25#27#ETX\n' 1.2)
 pulses=$(grep -o 'STEP 1: [0-9]* pulses, high [0-9.]*-[0-9.]* ns' <<<"$stats")
 echo "ramping: $pulses"
 read -r ramp_pulses high_min high_max < <(sed -E 's/.*: ([0-9]+) pulses, high ([0-9.]+)-([0-9.]+) ns/\1 \2 \3/' <<<"$pulses")
