@@ -16,6 +16,17 @@ namespace {
 dmac::Descriptor descriptors[kDmaChannels];
 dmac::Descriptor writeback[kDmaChannels];
 
+// Enables `channel` with CHCTRLB `chctrlb`, its descriptor already written.
+void enable_channel(uint32_t channel, uint32_t chctrlb) {
+  r8(dmac::kChId) = static_cast<uint8_t>(channel);
+  r8(dmac::kChCtrlA) = 0;
+  r32(dmac::kChCtrlB) = chctrlb;
+  r8(dmac::kChIntFlag) = 0x7;  // clear TERR, TCMPL, SUSP
+  // The descriptor and the buffer are plain RAM: they must be written before the channel runs.
+  __asm__ volatile("dmb" ::: "memory");
+  r8(dmac::kChCtrlA) = static_cast<uint8_t>(dmac::kChEnable);
+}
+
 }  // namespace
 
 void dma_init() {
@@ -38,13 +49,7 @@ void dma_start(uint32_t channel, const uint8_t* source, uint16_t count, uint32_t
   d.srcaddr = reinterpret_cast<uint32_t>(source) + count;
   d.dstaddr = destination;
   d.descaddr = 0;
-  r8(dmac::kChId) = static_cast<uint8_t>(channel);
-  r8(dmac::kChCtrlA) = 0;
-  r32(dmac::kChCtrlB) = dmac::chctrlb_beat_trigger(trigger);
-  r8(dmac::kChIntFlag) = 0x7;  // clear TERR, TCMPL, SUSP
-  // The descriptor and the buffer are plain RAM: they must be written before the channel runs.
-  __asm__ volatile("dmb" ::: "memory");
-  r8(dmac::kChCtrlA) = static_cast<uint8_t>(dmac::kChEnable);
+  enable_channel(channel, dmac::chctrlb_beat_trigger(trigger));
 }
 
 void dma_start_endless_word(uint32_t channel, const volatile uint32_t* source, uint32_t destination,
@@ -55,12 +60,7 @@ void dma_start_endless_word(uint32_t channel, const volatile uint32_t* source, u
   d.srcaddr = reinterpret_cast<uint32_t>(source);  // no increment: the address itself
   d.dstaddr = destination;
   d.descaddr = reinterpret_cast<uint32_t>(&d);  // the next block is this one again
-  r8(dmac::kChId) = static_cast<uint8_t>(channel);
-  r8(dmac::kChCtrlA) = 0;
-  r32(dmac::kChCtrlB) = dmac::chctrlb_beat_trigger(trigger, level);
-  r8(dmac::kChIntFlag) = 0x7;
-  __asm__ volatile("dmb" ::: "memory");
-  r8(dmac::kChCtrlA) = static_cast<uint8_t>(dmac::kChEnable);
+  enable_channel(channel, dmac::chctrlb_beat_trigger(trigger, level));
 }
 
 bool dma_busy(uint32_t channel) {

@@ -16,14 +16,6 @@ static_assert(board::kDrivers[1].step.group == kGroup && board::kDrivers[2].step
 static_assert(kDmaChannels > kStepEndDmaChannel, "dma.cpp's descriptor and write-back sections "
               "hold an entry for each channel used");
 
-constexpr uint32_t all_step_pins() {
-  uint32_t mask = 0;
-  for (const board::DriverPins& d : board::kDrivers) mask |= 1u << d.step.number;
-  return mask;
-}
-// Read by the DMAC at each CC1 match (RAM: the DMAC reads its source over the bus matrix).
-volatile uint32_t step_clear_mask = all_step_pins();
-
 constexpr uint32_t kPortGroup = port::kBase + kGroup * port::kGroupStride;
 
 struct Masks {
@@ -39,6 +31,9 @@ constexpr Masks step_masks() {
   return m;
 }
 constexpr Masks kMasks = step_masks();
+// Every STEP pin, read by the DMAC at each CC1 match (RAM: the DMAC reads its source over the bus
+// matrix).
+volatile uint32_t step_clear_mask = kMasks.of[7];
 
 }  // namespace
 
