@@ -7,7 +7,9 @@ first one also ends the power-up self-test), and takes hmc-emu --stats from --me
 --max-time: the step timer interrupt's (TC4, exception 35) cycles, entry and return, flash wait
 states and the timer's synchronisation included, over the STEP rising edges the emulated board
 counted. Beside them: bench/qemu's instruction counts of the same engine (the core alone, a fake
-port), Klipper's cycles per step on the SAMD21, and issue 18's targets.
+port), Klipper's cycles per step on the SAMD21, and issue 18's targets. At a constant rate, from
+--stats and --trace: the widest miss of a rise-to-rise time against the move's delay, and the
+share of rises more than one tick off it.
 
 With a fourth argument, bench/qemu's output under hmc-emu-bench --cycles (the same program in the
 cycle model): the main loop's StepScheduler::fill per step while ramping and its share of the CPU,
@@ -16,12 +18,15 @@ way: issue 18's "today").
 
 Usage: cycles.py HMC_EMU IMAGE [QEMU_BENCH_OUTPUT [FILL_CYCLES_OUTPUT]]
 """
+import json
 import re
 import subprocess
 import sys
+import tempfile
 
 MEASURE_FROM = 0.3  # s of virtual time: the boot, the self-test's end and the starts are over
 MEASURE_TO = 1.2
+TICKS_PER_SECOND = 48000000  # the trace's times
 
 
 def frame(name, *values):
@@ -38,8 +43,9 @@ def run(moves, accel=0):
         lines.append(frame("STM", motor, 1, 256, 0, delay))
     # Standard input stays open until hmc-emu stops at --max-time (at its end hmc-emu would stop
     # once the replies are quiet).
+    trace = tempfile.NamedTemporaryFile(prefix="cycles-trace-", suffix=".jsonl")
     emu = subprocess.Popen([EMU, IMAGE, "--fast", "--quiet", "--stats", "--measure-from",
-                            str(MEASURE_FROM), "--max-time", str(MEASURE_TO)],
+                            str(MEASURE_FROM), "--max-time", str(MEASURE_TO), "--trace", trace.name],
                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                            text=True)
     emu.stdin.write("".join(lines))
@@ -67,12 +73,19 @@ def run(moves, accel=0):
         sys.exit("cycles: %d motors stepped, %d expected:\n%s" % (moving, expected, done.stderr))
     seconds = float(window.group(2)) - float(window.group(1))
     # STEP pulse timing over the window, the worst of the motors (hmc-emu --stats, in ns).
-    pulses = re.findall(r"STEP \d: \d+ pulses, high ([\d.]+)-([\d.]+) ns, low >= ([\d.-]+) ns",
-                        done.stderr)
+    pulses = re.findall(r"STEP (\d): \d+ pulses, high ([\d.]+)-([\d.]+) ns, low >= ([\d.-]+) ns, "
+                        r"period ([\d.]+)-([\d.]+) ns", done.stderr)
+    # At a constant rate every rise should follow the one before by the move's delay exactly:
+    # the widest miss of any motor's rise-to-rise time (ns).
+    delays = dict(moves)
+    off = max((max(abs(float(p[4]) - delays[int(p[0])] * 1000), abs(float(p[5]) - delays[int(p[0])] * 1000))
+               for p in pulses if int(p[0]) in delays), default=-1) if accel == 0 else None
     return {
-        "high_min": min(float(p[0]) for p in pulses) if pulses else -1,
-        "high_max": max(float(p[1]) for p in pulses) if pulses else -1,
-        "low_min": min(float(p[2]) for p in pulses) if pulses else -1,
+        "late_share": None if accel != 0 else off_schedule_share(trace.name, dict(moves)),
+        "high_min": min(float(p[1]) for p in pulses) if pulses else -1,
+        "high_max": max(float(p[2]) for p in pulses) if pulses else -1,
+        "low_min": min(float(p[3]) for p in pulses) if pulses else -1,
+        "off_schedule": off,
         "steps": steps,
         "rate": steps / seconds,
         "entries": int(step.group(1)),
@@ -82,6 +95,23 @@ def run(moves, accel=0):
         "instructions": int(step.group(4)) / steps,
         "isr_waits": int(step.group(5)) / steps,
     }
+
+
+def off_schedule_share(trace_path, delays):
+    """The share (%) of the STEP rises from MEASURE_FROM on (hmc-emu --trace: times in 48 MHz
+    ticks) that come more than one tick off the previous rise + the move's delay."""
+    last, rises, off = {}, 0, 0
+    with open(trace_path) as trace:
+        for line in trace:
+            event = json.loads(line)
+            if event.get("ev") != "step" or event["t"] < MEASURE_FROM * TICKS_PER_SECOND:
+                continue
+            motor, t = event["motor"], event["t"]
+            if motor in last:
+                rises += 1
+                off += abs(t - last[motor] - delays[motor] * TICKS_PER_SECOND // 1000000) > 1
+            last[motor] = t
+    return 100.0 * off / rises if rises else -1
 
 
 def qemu_rows(path):
@@ -147,21 +177,24 @@ print("Step interrupt of the real image (hmc-firmware.elf, real HAL) in hmc-emu'
 print()
 print("| case | steps/s | cycles per step | of which flash wait states | instructions per step | "
       "cycles per interrupt | CPU share | STEP high (ns) | STEP low, shortest (ns) | "
+      "rise to rise, widest miss of the delay (ns) | rises more than a tick off it | "
       "bench/qemu instructions per step (core, fake port) | Klipper cycles per step | "
       "issue 18 target |")
-print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 results = []
 for name, moves, accel, qemu_row, klipper, target in CASES:
     r = run(moves, accel)
     if r is None:
-        print("| %s | refused: over the image's step budget (rate_limit) | | | | | | | | | %d | <= %d |"
+        print("| %s | refused: over the image's step budget (rate_limit) | | | | | | | | | | | %d | <= %d |"
               % (name, klipper, target))
         continue
     results.append((name, r, klipper, target))
-    print("| %s | %.0f | %.1f | %.1f | %.1f | %.1f | %.1f %% | %.0f-%.0f | %.0f | %s | %d | <= %d |" % (
+    off = "-" if r["off_schedule"] is None else "%.0f" % r["off_schedule"]
+    late = "-" if r["late_share"] is None else "%.2f %%" % r["late_share"]
+    print("| %s | %.0f | %.1f | %.1f | %.1f | %.1f | %.1f %% | %.0f-%.0f | %.0f | %s | %s | %s | %d | <= %d |" % (
         name, r["rate"], r["per_step"], r["isr_waits"], r["instructions"], r["per_entry"],
-        r["share"], r["high_min"], r["high_max"], r["low_min"], qemu.get(qemu_row, "-"), klipper,
-        target))
+        r["share"], r["high_min"], r["high_max"], r["low_min"], off, late,
+        qemu.get(qemu_row, "-"), klipper, target))
 print()
 for name, r, klipper, target in results:
     print("summary: | firmware step interrupt on the real image (hmc-emu cycles), %s | %.0f cycles per "
