@@ -27,9 +27,11 @@ constexpr unsigned kLevelOf(uint32_t ctrlb) { return (ctrlb >> 5) & 3; }
 constexpr bool is_sercom_tx(unsigned trigger) {
   return trigger >= 2 && trigger <= 12 && trigger % 2 == 0;
 }
-// TC3 MC0/MC1 0x19/0x1A, TC4 MC0/MC1 0x1C/0x1D (20.8.17, TRIGSRC).
-constexpr bool is_timer_match(unsigned trigger) {
-  return trigger == 0x19 || trigger == 0x1A || trigger == 0x1C || trigger == 0x1D;
+// The compare channel (0 or 1) of `tc` whose match is DMAC trigger `trigger`, or -1: MC0 and MC1
+// follow the timer's OVF trigger (20.8.17, TRIGSRC; chip.cpp gives each TC its base).
+int match_channel(const Tc& tc, unsigned trigger) {
+  const unsigned mc0 = tc.dma_trigger_base() + 1;
+  return trigger == mc0 || trigger == mc0 + 1 ? static_cast<int>(trigger - mc0) : -1;
 }
 
 uint32_t word_at(const uint8_t* d) {
@@ -107,7 +109,8 @@ void Dmac::start(unsigned channel) {
     return;
   }
   const unsigned trigger = kTriggerOf(c.ctrlb);
-  if (!is_sercom_tx(trigger) && !is_timer_match(trigger)) {
+  if (!is_sercom_tx(trigger) && match_channel(chip_.tc3(), trigger) < 0 &&
+      match_channel(chip_.tc4(), trigger) < 0) {
     chip_.violation("DMAC trigger " + std::to_string(trigger) + " is not modelled");
     return;
   }
@@ -203,8 +206,10 @@ void Dmac::watch_timers() {
     if (!c.active) continue;
     const unsigned t = kTriggerOf(c.ctrlb);
     // The timer's INTFLAG bits: MC0 0x10, MC1 0x20.
-    if (t == 0x19 || t == 0x1A) tc3 |= static_cast<uint8_t>(0x10u << (t - 0x19));
-    if (t == 0x1C || t == 0x1D) tc4 |= static_cast<uint8_t>(0x10u << (t - 0x1C));
+    const int on_tc3 = match_channel(chip_.tc3(), t);
+    const int on_tc4 = match_channel(chip_.tc4(), t);
+    if (on_tc3 >= 0) tc3 |= static_cast<uint8_t>(0x10u << on_tc3);
+    if (on_tc4 >= 0) tc4 |= static_cast<uint8_t>(0x10u << on_tc4);
   }
   chip_.tc3().set_dma_watch(tc3);
   chip_.tc4().set_dma_watch(tc4);

@@ -11,6 +11,13 @@ namespace hmc::emu {
 using samd21::port_functions::Unit;
 
 namespace {
+
+// The first counter position after `from` whose value modulo `m` is `value` (< m): where a
+// counter counting on from `from` next holds it.
+uint64_t next_position_holding(uint64_t value, uint64_t from, uint64_t m) {
+  return from + 1 + ((value + m - (from + 1) % m) % m);
+}
+
 // CTRLA.PRESCALER (30.8.1): DIV1, 2, 4, 8, 16, 64, 256, 1024.
 constexpr uint64_t kPrescaler[8] = {1, 2, 4, 8, 16, 64, 256, 1024};
 constexpr uint8_t kOvf = 1, kMc0 = 1u << 4, kMc1 = 1u << 5;
@@ -90,8 +97,7 @@ void Tc::advance(uint64_t now_ps) {
   if (now <= checked_position_) return;
   const uint64_t from = checked_position_;
   auto crossed = [&](uint64_t value) {  // some p in (from, now] with p mod m == value
-    const uint64_t first = from + 1 + ((value + m - (from + 1) % m) % m);
-    return first <= now;
+    return next_position_holding(value, from, m) <= now;
   };
   uint8_t flags = 0;
   if (crossed(0)) flags |= kOvf;
@@ -113,8 +119,7 @@ void Tc::advance(uint64_t now_ps) {
   uint64_t at[2] = {UINT64_MAX, UINT64_MAX};
   for (unsigned c = 0; c < 2; ++c) {
     if ((watched & (kMc0 << c)) == 0) continue;
-    const uint64_t value = cc_[c] % m;
-    const uint64_t first = from + 1 + ((value + m - (from + 1) % m) % m);
+    const uint64_t first = next_position_holding(cc_[c] % m, from, m);
     if (first + m <= now) {
       chip_.violation(name_ + ": two compare matches of a DMA trigger between two looks at the "
                       "timer (a period shorter than the emulator's step) are not modelled");
@@ -141,8 +146,7 @@ void Tc::match_since(uint64_t landed) {
   const uint64_t m = modulus();
   if (landed >= checked_position_) return;
   for (unsigned c = 0; c < 2; ++c) {
-    const uint64_t value = cc_[c] % m;
-    const uint64_t first = landed + 1 + ((value + m - (landed + 1) % m) % m);
+    const uint64_t first = next_position_holding(cc_[c] % m, landed, m);
     if (first > checked_position_) continue;
     const uint8_t flag = static_cast<uint8_t>(kMc0 << c);
     if ((flag & ~intflag_) != 0) {
@@ -170,7 +174,7 @@ uint64_t Tc::next_event_ps() const {
   const uint8_t bits[3] = {kOvf, kMc0, kMc1};
   for (int i = 0; i < 3; ++i) {
     if ((wanted & bits[i]) == 0) continue;
-    const uint64_t p = from + 1 + ((values[i] + m - (from + 1) % m) % m);
+    const uint64_t p = next_position_holding(values[i], from, m);
     next = p < next ? p : next;
   }
   return ps_at_position(next);
