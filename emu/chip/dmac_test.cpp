@@ -163,6 +163,32 @@ TEST_CASE("triggers at one tick are served by channel priority level") {
   }
 }
 
+TEST_CASE("a beat that writes the next compare chains a second match, stamped at its own tick") {
+  // The step engine's chain (step_pulses.h): the match raises STEP, ends it at CC1, and writes
+  // the next compare from RAM; the next match does the same. The emulator looks at the timer
+  // only after both matches, as after a long CPU block: each edge still lands at its own tick.
+  StepBench b;
+  constexpr uint32_t kNextCompare = kRam + 0x208, kEnd = kRam + 0x20C;
+  b.ram.word(kNextCompare, 1300);
+  b.ram.word(kEnd, 1096);
+  b.channel(2, 0x1C, 1, kSetMask, kPort + 0x18);    // MC0 → OUTSET
+  b.channel(3, 0x1D, 1, kClearMask, kPort + 0x14);  // MC1 → OUTCLR
+  b.channel(4, 0x1C, 1, kEnd, kTc4 + 0x1C);         // MC0 → CC1 (the pulse's end)
+  b.channel(5, 0x1C, 1, kNextCompare, kTc4 + 0x18); // MC0 → CC0 (the next match)
+  b.compares(1000, 0xFFFFFFFF);
+  b.run_to(1150);  // the first pulse over: the next compare is 1300, its end still 1096
+  b.ram.word(kEnd, 1396);
+  b.run_to(5000);
+  REQUIRE(b.chip.violation_message().empty());
+  CHECK(b.axis(0).steps == 2);
+  CHECK(b.axis(0).pulses.ended == 2);
+  const uint64_t rise = b.since_origin(b.axis(0).rise_ps);
+  CHECK(rise >= ticks(1300) + kLatencyPs - 1);
+  CHECK(rise <= ticks(1300) + kLatencyPs + 1);
+  CHECK(b.axis(0).pulses.high_max_ps <= ticks(96) + 1);
+  CHECK(b.axis(0).pulses.period_max_ps <= ticks(300) + 1);
+}
+
 TEST_CASE("what the DMAC model does not cover stops the emulator, naming it") {
   StepBench b;
   SECTION("a trigger action other than one beat") {

@@ -38,6 +38,10 @@ void Tc::set_dma_watch(uint8_t flags) {
 // The time at which the count reaches `position` (its first picosecond).
 uint64_t Tc::ps_at_position(uint64_t p) const {
   const uint64_t hz = tick_hz();
+  if (p < base_position_) {  // a match behind a base a compare's write just moved (rebase)
+    const Wide back = static_cast<Wide>(base_position_ - p) * Chip::kPsPerSecond / hz;
+    return base_ps_ - static_cast<uint64_t>(back);
+  }
   const Wide ps = static_cast<Wide>(p - base_position_) * Chip::kPsPerSecond + hz - 1;
   return base_ps_ + static_cast<uint64_t>(ps / hz);
 }
@@ -154,11 +158,8 @@ void Tc::match_since(uint64_t landed) {
       chip_.irq_changed();
     }
     if ((dma_watch_ & flag) != 0) {
-      // The match lies before the base the write just moved to now (rebase).
-      const uint64_t back = static_cast<uint64_t>(static_cast<Wide>(base_position_ - first) *
-                                                  Chip::kPsPerSecond / tick_hz());
       const unsigned trigger = dma_trigger_base_ + 1 + c;
-      chip_.dmac().timer_trigger(&trigger, 1, first >= base_position_ ? ps_at_position(first) : base_ps_ - back);
+      chip_.dmac().timer_trigger(&trigger, 1, ps_at_position(first));
     }
   }
 }
