@@ -53,7 +53,11 @@ for motor in 1 2; do
   read -r high_min high_max low_min period_min period_max < <(sed -E 's/.*high ([0-9.]+)-([0-9.]+) ns, low >= ([0-9.-]+) ns, period ([0-9.]+)-([0-9.]+) ns/\1 \2 \3 \4 \5/' <<<"$pulses")
   if [[ -z $period_max ]] || ! awk -v a="$high_min" -v b="$high_max" -v l="$low_min" -v p="$period_min" -v q="$period_max" \
       'BEGIN { exit !(a >= 1999 && b <= 4001 && l >= 1900 && p >= 19999 && q <= 20001) }'; then
-    echo "FAIL: motor $motor: expected STEP 2.0-4.0 us high, >= 1.9 us low, rises 20 000 ns apart"; exit 1
+    echo "FAIL: motor $motor: expected STEP 2.0-4.0 us high, >= 1.9 us low, rises 20 000 ns apart"
+    # The counts were exact (above): rises off their period are the step interrupt's, raised by
+    # the CPU when the other motor's event comes within its decision time.
+    echo "  (rises the CPU made late: docs/performance.md, 'Steps off their schedule on the image')"
+    exit 1
   fi
 done
 if ((m3 != 0)); then echo "FAIL: motor 3 (refused) made $m3 steps"; exit 1; fi
