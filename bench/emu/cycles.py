@@ -76,12 +76,16 @@ def run(moves, accel=0):
     pulses = re.findall(r"STEP (\d): \d+ pulses, high ([\d.]+)-([\d.]+) ns, low >= ([\d.-]+) ns, "
                         r"period ([\d.]+)-([\d.]+) ns", done.stderr)
     # At a constant rate every rise should follow the one before by the move's delay exactly:
-    # the widest miss of any motor's rise-to-rise time (ns).
-    delays = dict(moves)
-    off = max((max(abs(float(p[4]) - delays[int(p[0])] * 1000), abs(float(p[5]) - delays[int(p[0])] * 1000))
-               for p in pulses if int(p[0]) in delays), default=-1) if accel == 0 else None
+    # the widest miss of any motor's rise-to-rise time (ns), and the share of rises off it.
+    off, late = None, None
+    if accel == 0:
+        delays = dict(moves)
+        off = max((max(abs(float(p[4]) - delays[int(p[0])] * 1000),
+                       abs(float(p[5]) - delays[int(p[0])] * 1000))
+                   for p in pulses if int(p[0]) in delays), default=-1)
+        late = off_schedule_share(trace.name, delays)
     return {
-        "late_share": None if accel != 0 else off_schedule_share(trace.name, dict(moves)),
+        "late_share": late,
         "high_min": min(float(p[1]) for p in pulses) if pulses else -1,
         "high_max": max(float(p[2]) for p in pulses) if pulses else -1,
         "low_min": min(float(p[3]) for p in pulses) if pulses else -1,
