@@ -41,7 +41,14 @@ Chip::Chip(const ChipOptions& options) : options_(options) {
   // 0x1B, MC0 0x1C, MC1 0x1D (the table goes on with TC5 0x1E-0x20 ... TC7 MC0/MC1 0x25/0x26).
   tc3_ = std::make_unique<Tc>(*this, "TC3", 0x1B, 0x18);
   tc4_ = std::make_unique<Tc>(*this, "TC4", 0x1C, 0x1B);
-  tcc0_ = std::make_unique<Tcc>(*this);
+  // TCC0-2 (Table 31-1 "TCC Configuration Summary": counter size, compare channels, waveform
+  // outputs): GCLK channels 0x1A TCC0_TCC1 and 0x1B TCC2_TC3 (15.8.3 CLKCTRL.ID); DMAC triggers
+  // TCC0 OVF 0x0D, MC0-3 0x0E-0x11; TCC1 OVF 0x12, MC0/MC1 0x13/0x14; TCC2 OVF 0x15, MC0/MC1
+  // 0x16/0x17 (20.8.17 CHCTRLB.TRIGSRC).
+  tccs_[0] = std::make_unique<Tcc>(*this, 0, 24, 4, 8, 0x1A, 0x0D);
+  tccs_[1] = std::make_unique<Tcc>(*this, 1, 24, 2, 4, 0x1A, 0x12);
+  tccs_[2] = std::make_unique<Tcc>(*this, 2, 16, 2, 2, 0x1B, 0x15);
+  dma_timers_ = {tc3_.get(), tc4_.get(), tccs_[0].get(), tccs_[1].get(), tccs_[2].get()};
   dmac_ = std::make_unique<Dmac>(*this);
   board_ = std::make_unique<Board>(*this);
   hz_ = gclk_->generator_hz(0);
@@ -62,13 +69,17 @@ Chip::Chip(const ChipOptions& options) : options_(options) {
     attach(0x42000800 + 0x400 * n, 0x400, sercoms_[n].get(), "SERCOM" + std::to_string(n),
            Pm::kApbCMask, 1u << (2 + n));
   }
-  attach(0x42002000, 0x400, tcc0_.get(), "TCC0", Pm::kApbCMask, 1u << 8);
+  for (unsigned n = 0; n < 3; ++n) {
+    attach(0x42002000 + 0x400 * n, 0x400, tccs_[n].get(), "TCC" + std::to_string(n),
+           Pm::kApbCMask, 1u << (8 + n));
+  }
   attach(0x42002C00, 0x400, tc3_.get(), "TC3", Pm::kApbCMask, 1u << 11);
   attach(0x42003000, 0x400, tc4_.get(), "TC4", Pm::kApbCMask, 1u << 12);
   attach(0x60000000, 0x400, &port_->iobus(), "PORT (IOBUS)", -1, 0);
   attach(0xE000E000, 0x1000, scs_.get(), "System Control Space", -1, 0);
 
-  timed_ = {sysctrl_.get(), wdt_.get(), scs_.get(), tc3_.get(), tc4_.get(), tcc0_.get()};
+  timed_ = {sysctrl_.get(), wdt_.get(), scs_.get()};
+  timed_.insert(timed_.end(), dma_timers_.begin(), dma_timers_.end());
   for (auto& s : sercoms_) timed_.push_back(s.get());
   timed_.push_back(dmac_.get());
   timed_.push_back(board_.get());  // its devices' own deadlines (a strip's latch, a servo let go)
@@ -77,7 +88,7 @@ Chip::Chip(const ChipOptions& options) : options_(options) {
   lines_[4] = [this] { return eic_->irq(); };
   lines_[6] = [this] { return dmac_->irq(); };
   for (unsigned n = 0; n < 6; ++n) lines_[9 + n] = [this, n] { return sercoms_[n]->irq(); };
-  lines_[15] = [this] { return tcc0_->irq(); };
+  for (unsigned n = 0; n < 3; ++n) lines_[15 + n] = [this, n] { return tccs_[n]->irq(); };
   lines_[18] = [this] { return tc3_->irq(); };
   lines_[19] = [this] { return tc4_->irq(); };
   // The 32-bit pair's interrupt comes from TC4 (the master, 30.6.2.4); TC5 is not a block of
@@ -162,11 +173,13 @@ void Chip::eic_line(unsigned extint, bool level) { eic_->line_changed(extint, le
 
 void Chip::dma_trigger(unsigned sercom) { dmac_->sercom_ready(sercom); }
 
-void Chip::before_port_write() { tc4_->advance(now_ps()); }
+void Chip::before_port_write() {
+  for (DmaTimer* timer : dma_timers_) timer->advance(access_ps());
+}
 
 bool Chip::peripheral_output(samd21::port_functions::Unit unit, unsigned instance, unsigned index) {
   using samd21::port_functions::Unit;
-  if (unit == Unit::kTcc && instance == 0) return tcc0_->output(index);
+  if (unit == Unit::kTcc && instance < 3) return tccs_[instance]->output(index);
   if (unit == Unit::kSercom && instance < 6) return sercoms_[instance]->pad_output(index);
   return false;  // TC WO levels are not followed edge by edge (the buzzer is heard by its frequency)
 }

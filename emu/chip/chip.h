@@ -58,6 +58,17 @@ class Timed {
   virtual uint64_t next_event_ps() const = 0;  // UINT64_MAX: none
 };
 
+// A timer whose compare matches are DMAC triggers: MCx is its OVF trigger + 1 + x (datasheet
+// 20.8.17, CHCTRLB.TRIGSRC). A match a DMAC channel listens to is an event of the timer's, served
+// at its exact time.
+class DmaTimer : public Timed {
+ public:
+  virtual unsigned dma_trigger_base() const = 0;  // the OVF trigger
+  virtual unsigned compare_channels() const = 0;
+  // Bit x set: a DMAC channel is on MCx.
+  virtual void set_dma_watch(unsigned channels) = 0;
+};
+
 class Chip {
  public:
   static constexpr uint64_t kPsPerSecond = 1000000000000ull;
@@ -81,6 +92,7 @@ class Chip {
   // keeps its own time in the pin trace and the STEP pulse figures).
   uint64_t access_ps() const { return master_ps_ != UINT64_MAX ? master_ps_ : now_ps(); }
   void set_master_ps(uint64_t ps) { master_ps_ = ps; }
+  uint64_t master_ps() const { return master_ps_; }
   uint64_t cycles() const { return cycles_; }
   void charge_cycles(uint64_t cycles) { cycles_ += cycles; }
   // Cycles charged ahead (a block is charged before it runs) that an access turned out not to
@@ -143,10 +155,12 @@ class Chip {
   Dmac& dmac() { return *dmac_; }
   // SERCOM `sercom`'s transmit buffer emptied at a byte's end: the DMAC may feed it (dmac.h).
   void dma_trigger(unsigned sercom);
-  // A PORT register is about to be written: DMA beats the timers triggered before now land
-  // first, so the CPU's write and the DMAC's keep their order.
+  // A PORT register is about to be written: DMA beats the timers triggered before the access's
+  // time land first, so the CPU's write and the DMAC's keep their order.
   void before_port_write();
-  Tcc& tcc0() { return *tcc0_; }
+  Tcc& tcc(unsigned n) { return *tccs_[n]; }
+  // The timers whose compare matches the DMAC can be triggered by.
+  const std::array<DmaTimer*, 5>& dma_timers() { return dma_timers_; }
   // The level a peripheral drives on its output signal (`unit` a port_functions::Unit: SERCOM
   // pad, TC or TCC WO[index]) now; false for a signal nothing drives.
   bool peripheral_output(samd21::port_functions::Unit unit, unsigned instance, unsigned index);
@@ -191,7 +205,8 @@ class Chip {
   std::array<std::unique_ptr<Sercom>, 6> sercoms_;
   std::unique_ptr<Tc> tc3_;
   std::unique_ptr<Tc> tc4_;
-  std::unique_ptr<Tcc> tcc0_;
+  std::array<std::unique_ptr<Tcc>, 3> tccs_;
+  std::array<DmaTimer*, 5> dma_timers_{};
   std::unique_ptr<Dmac> dmac_;
   std::unique_ptr<Board> board_;
   std::vector<Slot> slots_;

@@ -27,11 +27,12 @@ constexpr unsigned kLevelOf(uint32_t ctrlb) { return (ctrlb >> 5) & 3; }
 constexpr bool is_sercom_tx(unsigned trigger) {
   return trigger >= 2 && trigger <= 12 && trigger % 2 == 0;
 }
-// The compare channel (0 or 1) of `tc` whose match is DMAC trigger `trigger`, or -1: MC0 and MC1
-// follow the timer's OVF trigger (20.8.17, TRIGSRC; chip.cpp gives each TC its base).
-int match_channel(const Tc& tc, unsigned trigger) {
-  const unsigned mc0 = tc.dma_trigger_base() + 1;
-  return trigger == mc0 || trigger == mc0 + 1 ? static_cast<int>(trigger - mc0) : -1;
+// The compare channel of `timer` whose match is DMAC trigger `trigger`, or -1: MC0, MC1, ... follow
+// the timer's OVF trigger (20.8.17, TRIGSRC; chip.cpp gives each timer its base).
+int match_channel(const DmaTimer& timer, unsigned trigger) {
+  const unsigned mc0 = timer.dma_trigger_base() + 1;
+  return trigger >= mc0 && trigger < mc0 + timer.compare_channels() ? static_cast<int>(trigger - mc0)
+                                                                     : -1;
 }
 
 uint32_t word_at(const uint8_t* d) {
@@ -109,8 +110,11 @@ void Dmac::start(unsigned channel) {
     return;
   }
   const unsigned trigger = kTriggerOf(c.ctrlb);
-  if (!is_sercom_tx(trigger) && match_channel(chip_.tc3(), trigger) < 0 &&
-      match_channel(chip_.tc4(), trigger) < 0) {
+  const auto& timers = chip_.dma_timers();
+  const bool timer_match = std::any_of(timers.begin(), timers.end(), [trigger](const DmaTimer* t) {
+    return match_channel(*t, trigger) >= 0;
+  });
+  if (!is_sercom_tx(trigger) && !timer_match) {
     chip_.violation("DMAC trigger " + std::to_string(trigger) + " is not modelled");
     return;
   }
@@ -201,18 +205,14 @@ void Dmac::block_done(unsigned i) {
 }
 
 void Dmac::watch_timers() {
-  uint8_t tc3 = 0, tc4 = 0;
-  for (const Channel& c : channels_) {
-    if (!c.active) continue;
-    const unsigned t = kTriggerOf(c.ctrlb);
-    // The timer's INTFLAG bits: MC0 0x10, MC1 0x20.
-    const int on_tc3 = match_channel(chip_.tc3(), t);
-    const int on_tc4 = match_channel(chip_.tc4(), t);
-    if (on_tc3 >= 0) tc3 |= static_cast<uint8_t>(0x10u << on_tc3);
-    if (on_tc4 >= 0) tc4 |= static_cast<uint8_t>(0x10u << on_tc4);
+  for (DmaTimer* timer : chip_.dma_timers()) {
+    unsigned watched = 0;  // bit x: MCx
+    for (const Channel& c : channels_) {
+      const int channel = c.active ? match_channel(*timer, kTriggerOf(c.ctrlb)) : -1;
+      if (channel >= 0) watched |= 1u << channel;
+    }
+    timer->set_dma_watch(watched);
   }
-  chip_.tc3().set_dma_watch(tc3);
-  chip_.tc4().set_dma_watch(tc4);
 }
 
 void Dmac::advance(uint64_t) {
@@ -275,16 +275,21 @@ void Dmac::beat(unsigned i, uint64_t ps) {
     return;
   }
   const uint32_t value = word_at(bytes) & (c.beat == 4 ? 0xFFFFFFFFu : (1u << (8 * c.beat)) - 1u);
+  // The access keeps the beat's time until its block's end is handled too (a TCC's
+  // set_dma_watch advances it to that time). A beat may run inside another's write (a PORT write first lands
+  // the beats triggered before it): the outer one's time is put back after.
+  const uint64_t outer_ps = chip_.master_ps();
+  chip_.set_master_ps(ps);
   if (c.destination >= 0x40000000u) {
-    chip_.set_master_ps(ps);
     chip_.bus_write(c.destination, value, c.beat);
-    chip_.set_master_ps(UINT64_MAX);
   } else if (!chip_.memory().write(c.destination, bytes, c.beat)) {
     chip_.violation("DMAC write outside memory");
+    chip_.set_master_ps(outer_ps);
     return;
   }
   if (c.source_increments) c.source += c.beat;
   if (--c.remaining == 0) block_done(i);
+  chip_.set_master_ps(outer_ps);
 }
 
 }  // namespace hmc::emu

@@ -1,5 +1,5 @@
 // DMAC: the channels the image uses — the LED strips' SPI transmitters (SERCOM TX triggers, byte
-// beats) and the STEP pulses (TC4 MC0/MC1 triggers, word beats to PORT OUTSET/OUTCLR, each
+// beats) and the STEP pulses (TC4 MC0/MC1 or TCC1/TCC2 MC0/MC1 triggers, word beats to PORT OUTSET/OUTCLR, each
 // channel's descriptor linked to itself so it runs for ever). A channel, once enabled, fetches
 // its descriptor from BASEADDR + 16·channel and moves one beat per trigger (CHCTRLB.TRIGACT
 // BEAT) until BTCNT beats are done; then it fetches the descriptor DESCADDR points to, or, the
@@ -28,8 +28,8 @@ class Dmac : public Peripheral, public Timed {
   // CPU bus stall (a synchronised write) does not hold it up; advance() alone would serve the
   // trigger only after the stall.
   void sercom_ready(unsigned sercom);
-  // A timer's compare matches at `ps` (TRIGSRC values, `count` of them: a timer's MC0 and MC1
-  // may match at one tick): the channels on them move one beat each, in priority order,
+  // A timer's compare matches at `ps` (TRIGSRC values, `count` of them: a timer's compare
+  // channels may match at one tick): the channels on them move one beat each, in priority order,
   // landing kTriggerToWriteCycles after the match.
   void timer_trigger(const unsigned* triggers, unsigned count, uint64_t ps);
 

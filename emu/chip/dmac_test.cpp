@@ -1,7 +1,8 @@
 // The DMAC on a bare chip (no image): TC4's compare matches trigger self-linked channels that
 // write PORT OUTSET/OUTCLR with word beats; the STEP edges the board sees land at the match's
 // tick plus the DMA latency, however late the emulator looks at the timer; simultaneous
-// triggers are served by priority level; what is not modelled stops the emulator.
+// triggers are served by priority level; what is not modelled stops the emulator. TCC1 and TCC2
+// free-running: their compare flags, interrupt lines and MCx DMA triggers at the match's tick.
 #include <catch2/catch.hpp>
 
 #include <cstring>
@@ -187,6 +188,144 @@ TEST_CASE("a beat that writes the next compare chains a second match, stamped at
   CHECK(rise <= ticks(1300) + kLatencyPs + 1);
   CHECK(b.axis(0).pulses.high_max_ps <= ticks(96) + 1);
   CHECK(b.axis(0).pulses.period_max_ps <= ticks(300) + 1);
+}
+
+// TCC`index` (1 or 2) free-running in NPWM to `per` at 48 MHz (generator 0 after the
+// bootloader, prescaler 1), the step pin of motor 2 an output, and the DMAC on.
+struct TccBench {
+  Chip chip{ChipOptions{}};
+  Ram ram;
+  uint32_t base;
+  uint64_t origin_ps = 0;  // the enable's write: the counter's tick 0
+  uint32_t step = 1u << samd21::board::kDrivers[1].step.number;
+
+  TccBench(unsigned index, uint32_t per) : base(0x42002000 + 0x400 * index) {
+    chip.set_memory(&ram);
+    chip.bus_write(0x40000420, chip.bus_read(0x40000420, 4) | (1u << (8 + index)), 4);  // APBCMASK
+    chip.bus_write(0x40000C02, 0x4000 | (index == 2 ? 0x1B : 0x1A), 2);  // CLKCTRL: CLKEN, GEN 0
+    chip.bus_write(kPort + 0x08, step, 4);  // DIRSET
+    chip.bus_write(kDmac + 0x34, kDescriptors, 4);
+    chip.bus_write(kDmac + 0x38, kWriteBack, 4);
+    chip.bus_write(kDmac + 0x00, 0xF02, 2);  // DMAENABLE, LVLEN0-3
+    tcc(0x3C, 2);    // WAVE: NPWM
+    tcc(0x40, per);  // PER
+    origin_ps = chip.now_ps();
+    tcc(0x00, 2);    // CTRLA: ENABLE, prescaler DIV1
+  }
+  void tcc(uint32_t offset, uint32_t value) { chip.bus_write(base + offset, value, 4); }
+  uint32_t reg(uint32_t offset) { return chip.bus_read(base + offset, 4); }
+  uint32_t count() {
+    chip.bus_write(base + 0x05, 4u << 5, 1);  // CTRLBSET: CMD READSYNC
+    return reg(0x34);
+  }
+  // The first picosecond of the counter's `tick`, and the CPU brought to `cycles_before` cycles
+  // (one cycle: one tick) before it.
+  uint64_t tick_ps(uint64_t tick) const { return origin_ps + (tick * 1000000000000ull + 47999999) / 48000000; }
+  void run_to(uint64_t tick, uint64_t cycles_before = 0) {
+    chip.charge_cycles(chip.cycles_at(tick_ps(tick)) - cycles_before - chip.cycles());
+    chip.advance();
+  }
+  void channel(unsigned n, unsigned trigger, uint32_t source, uint32_t destination) {
+    const uint32_t at = kDescriptors + 16 * n;
+    ram.word(at + 0, 1u | (2u << 8) | (1u << 16));  // BTCTRL: VALID, BEATSIZE WORD; BTCNT 1
+    ram.word(at + 4, source);
+    ram.word(at + 8, destination);
+    ram.word(at + 12, at);  // DESCADDR: itself
+    chip.bus_write(kDmac + 0x3F, n, 1);
+    chip.bus_write(kDmac + 0x44, (trigger << 8) | (1u << 5) | (2u << 22), 4);  // LVL 1, BEAT
+    chip.bus_write(kDmac + 0x40, 2, 1);
+  }
+  const Board::Axis& axis() { return chip.board().axis(1); }
+};
+
+constexpr uint32_t kMc0 = 1u << 16, kMc1 = 1u << 17;
+
+TEST_CASE("TCC1 free-running: CC0 sets INTFLAG.MC0 at its tick, and NVIC line 16 when enabled") {
+  TccBench b(1, 0xFFFFFF);
+  b.run_to(20000);
+  const uint32_t count = b.count();
+  CHECK(count >= 20000);
+  CHECK(count < 20100);
+  b.tcc(0x44, count + 1000);  // CC0
+  b.run_to(count + 1000, 1);  // one tick before the match
+  CHECK((b.reg(0x2C) & kMc0) == 0);
+  b.run_to(count + 1000);
+  CHECK((b.reg(0x2C) & (kMc0 | kMc1)) == kMc0);
+  CHECK_FALSE(b.chip.irq_line(16));
+  b.tcc(0x28, kMc0);  // INTENSET: MC0
+  CHECK(b.chip.irq_line(16));
+  CHECK_FALSE(b.chip.irq_line(15));
+  CHECK_FALSE(b.chip.irq_line(17));
+  b.tcc(0x2C, kMc0);  // cleared: the line falls; set again one period later
+  CHECK_FALSE(b.chip.irq_line(16));
+  b.run_to((1u << 24) + count + 1000, 1);
+  CHECK_FALSE(b.chip.irq_line(16));
+  b.run_to((1u << 24) + count + 1000);
+  CHECK(b.chip.irq_line(16));
+  CHECK(b.chip.violation_message().empty());
+}
+
+TEST_CASE("TCC1 MC0 raises STEP by DMA and copies the pulse's end into CC1, whose MC1 lowers it") {
+  TccBench b(1, 0xFFFFFF);
+  constexpr uint32_t kEnd = kRam + 0x208;
+  b.ram.word(kSetMask, b.step);
+  b.ram.word(kClearMask, b.step);
+  b.channel(2, 0x13, kSetMask, kPort + 0x18);    // TCC1 MC0 → OUTSET
+  b.channel(3, 0x13, kEnd, b.base + 0x48);       // TCC1 MC0 → CC1
+  b.channel(4, 0x14, kClearMask, kPort + 0x14);  // TCC1 MC1 → OUTCLR
+  b.run_to(20000);
+  const uint32_t rise = b.count() + 1000;
+  SECTION("the copied end ahead of the count: the pin falls at it") {
+    b.ram.word(kEnd, rise + 96);
+    b.tcc(0x44, rise);
+    b.run_to(rise + 5000);  // both matches passed before the emulator looked
+    REQUIRE(b.chip.violation_message().empty());
+    CHECK(b.reg(0x48) == rise + 96);
+    CHECK(b.axis().steps == 1);
+    CHECK(b.axis().pulses.ended == 1);
+    CHECK(b.axis().rise_ps >= b.tick_ps(rise) + kLatencyPs - 1);
+    CHECK(b.axis().rise_ps <= b.tick_ps(rise) + kLatencyPs + 1);
+    CHECK(b.axis().pulses.high_min_ps >= ticks(96) - 1);
+    CHECK(b.axis().pulses.high_min_ps <= ticks(96) + 1);
+    CHECK((b.chip.port().out(0) & b.step) == 0);
+  }
+  SECTION("the copied end behind the count when it lands: the pin falls after the wrap") {
+    b.ram.word(kEnd, rise);
+    b.tcc(0x44, rise);
+    b.run_to(rise + 5000);
+    REQUIRE(b.chip.violation_message().empty());
+    CHECK(b.axis().steps == 1);
+    CHECK((b.chip.port().out(0) & b.step) != 0);
+    b.run_to((1u << 24) + rise + 5000);
+    CHECK(b.axis().pulses.ended == 1);
+    CHECK(b.axis().pulses.high_min_ps >= ticks(1u << 24) - 1);
+    CHECK(b.axis().pulses.high_min_ps <= ticks(1u << 24) + 1);
+  }
+}
+
+TEST_CASE("TCC2 is 16 bits: CC0 behind the count matches after the wrap, a CC of 0 at it; masks") {
+  TccBench b(2, 0xFFFF);
+  CHECK(b.reg(0x40) == 0xFFFF);
+  b.run_to(30000);
+  // CC1 is 0 (its reset value): the count started at 0 at the enable but did not reach it.
+  CHECK((b.reg(0x2C) & kMc1) == 0);
+  const uint32_t count = b.count();
+  b.tcc(0x44, count - 10);  // behind the count
+  b.run_to(1u << 16, 1);
+  CHECK((b.reg(0x2C) & (1 | kMc0 | kMc1)) == 0);
+  b.run_to(1u << 16);  // the wrap: OVF, and the count 0 equals CC1
+  CHECK((b.reg(0x2C) & (1 | kMc0 | kMc1)) == (1 | kMc1));
+  b.run_to((1u << 16) + count - 10, 1);
+  CHECK((b.reg(0x2C) & kMc0) == 0);
+  b.run_to((1u << 16) + count - 10);
+  CHECK((b.reg(0x2C) & kMc0) != 0);
+  b.run_to(3 * (1u << 16) + 123);
+  const uint32_t wrapped = b.count();
+  const uint64_t tick = (b.chip.now_ps() - b.origin_ps) * 48000000 / 1000000000000ull;
+  CHECK(wrapped == tick % (1u << 16));
+  b.tcc(0x48, 0x12345);
+  CHECK(b.reg(0x48) == 0x2345);
+  CHECK(b.chip.violation_message().empty());
 }
 
 TEST_CASE("what the DMAC model does not cover stops the emulator, naming it") {

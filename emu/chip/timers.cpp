@@ -29,9 +29,9 @@ constexpr unsigned kTc3ClockId = 0x1B;  // GCLK_TCC2_TC3: TC3 drives the buzzer'
 Tc::Tc(Chip& chip, std::string name, unsigned clock_id, unsigned dma_trigger_base)
     : chip_(chip), name_(std::move(name)), clock_id_(clock_id), dma_trigger_base_(dma_trigger_base) {}
 
-void Tc::set_dma_watch(uint8_t flags) {
+void Tc::set_dma_watch(unsigned channels) {
   advance(chip_.now_ps());
-  dma_watch_ = flags;
+  dma_watch_ = static_cast<uint8_t>((channels & 3) << 4);  // kMc0, kMc1
   chip_.reschedule();
 }
 
@@ -288,37 +288,46 @@ void Tc::write(uint32_t offset, uint32_t value, unsigned size) {
   chip_.reschedule();
 }
 
-// ---- TCC0 (datasheet chapter 31; register offsets and reset values from Microchip's register
+// ---- TCC (datasheet chapter 31; register offsets and reset values from Microchip's register
 // description): CTRLA 0x00, CTRLBCLR 0x04, CTRLBSET 0x05, SYNCBUSY 0x08, WEXCTRL 0x14, DRVCTRL
 // 0x18, INTENCLR 0x24, INTENSET 0x28, INTFLAG 0x2C, STATUS 0x30, COUNT 0x34, PATT 0x38, WAVE 0x3C,
-// PER 0x40, CC0-3 0x44-0x50, PERB 0x6C, CCB0-3 0x70-0x7C.
+// PER 0x40, CC0-3 0x44-0x50, PERB 0x6C, CCB0-3 0x70-0x7C. TCC1 and TCC2 have CC0 and CC1 only.
 namespace {
-constexpr uint32_t kTccClockId = 0x1A;  // GCLK_TCC0_TCC1 (HARDWARE.md)
 constexpr uint32_t kTccOvf = 1;
+// INTFLAG.MCx: "This flag is set on a comparison match, or when the corresponding CCx register
+// contains a valid capture value" (31.8, INTFLAG).
+constexpr uint32_t mc(unsigned n) { return 1u << (16 + n); }
 constexpr uint32_t kPerbv = 1u << 7;
 constexpr uint32_t ccbv(unsigned n) { return 1u << (16 + n); }
 constexpr uint8_t kLupd = 1u << 1;
 constexpr uint32_t kWaveNpwm = 2;
 }  // namespace
 
-Tcc::Tcc(Chip& chip) : chip_(chip) { reset_registers(); }
+Tcc::Tcc(Chip& chip, unsigned index, unsigned width, unsigned channels, unsigned outputs,
+         unsigned clock_id, unsigned dma_trigger_base)
+    : chip_(chip), name_("TCC" + std::to_string(index)), index_(index), channels_(channels),
+      outputs_(outputs), clock_id_(clock_id), dma_trigger_base_(dma_trigger_base),
+      mask_(static_cast<uint32_t>((uint64_t{1} << width) - 1)) {
+  reset_registers();
+}
 
 void Tcc::reset_registers() {
   ctrla_ = 0;
   ctrlb_ = 0;
   wave_ = 0;
-  per_ = perb_ = 0xFFFFFF;  // PER/PERB reset: all ones, 24 bits used
-  for (unsigned c = 0; c < 4; ++c) cc_[c] = ccb_[c] = 0;
+  per_ = perb_ = mask_;  // PER/PERB reset: all ones, the counter's width used
+  for (unsigned c = 0; c < kMaxChannels; ++c) cc_[c] = ccb_[c] = 0;
   buffer_valid_ = inten_ = intflag_ = count_ = 0;
   other_ = RegisterBytes(0x80);
   hz_ = 0;
   period_start_ = processed_ = 0;
+  for (uint64_t& w : written_) w = 0;
   for (bool& l : level_) l = false;
   next_ps_ = UINT64_MAX;
 }
 
 uint64_t Tcc::tick_hz() const {
-  return chip_.channel_hz(kTccClockId) / kPrescaler[(ctrla_ >> 8) & 7];
+  return chip_.channel_hz(clock_id_) / kPrescaler[(ctrla_ >> 8) & 7];
 }
 
 uint64_t Tcc::tick_at(uint64_t ps) const {
@@ -331,16 +340,24 @@ uint64_t Tcc::ps_at(uint64_t tick) const {
 
 bool Tcc::output(unsigned wo) {
   advance(chip_.now_ps());
-  return enabled() && level_[wo % 4];
+  return enabled() && wo < outputs_ && level_[wo % channels_];
+}
+
+// The DMAC's channels changed, possibly from a beat at its own time (access_ps): the matches
+// before it are served with the channels there were.
+void Tcc::set_dma_watch(unsigned channels) {
+  advance(chip_.access_ps());
+  dma_watch_ = channels;
 }
 
 void Tcc::set_output(unsigned channel, bool level, uint64_t ps) {
   if (level_[channel] == level) return;
   level_[channel] = level;
   // Output matrix with WEXCTRL.OTMX = 0 (31.6.3.x "Waveform Extension", Output Matrix table):
-  // WO[n] and WO[n + 4] both follow CC[n].
-  chip_.board().peripheral_edge(Unit::kTcc, 0, channel, level, ps);
-  chip_.board().peripheral_edge(Unit::kTcc, 0, channel + 4, level, ps);
+  // WO[n] follows CC[n % channels] (TCC0: WO[n] and WO[n + 4] both follow CC[n]).
+  for (unsigned wo = channel; wo < outputs_; wo += channels_) {
+    chip_.board().peripheral_edge(Unit::kTcc, index_, wo, level, ps);
+  }
 }
 
 // "Double Buffering" (31.6.2.6): at the UPDATE condition — the counter wrapping at TOP, in
@@ -349,49 +366,76 @@ void Tcc::set_output(unsigned channel, bool level, uint64_t ps) {
 void Tcc::apply_buffers() {
   if ((ctrlb_ & kLupd) != 0) return;
   if ((buffer_valid_ & kPerbv) != 0) per_ = perb_;
-  for (unsigned c = 0; c < 4; ++c) {
+  for (unsigned c = 0; c < channels_; ++c) {
     if ((buffer_valid_ & ccbv(c)) != 0) cc_[c] = ccb_[c];
   }
   buffer_valid_ = 0;
 }
 
+// The tick of the next event: the wrap, or an earlier compare match of this period.
+uint64_t Tcc::next_tick() const {
+  uint64_t next = period_start_ + period();
+  for (unsigned c = 0; c < channels_; ++c) {
+    const uint64_t match = period_start_ + cc_[c];
+    if (match > processed_ && match > written_[c] && match < next) next = match;
+  }
+  return next;
+}
+
+// Enabled means NPWM: enabling in another mode, or writing WAVE while enabled, stops the
+// emulator (write()). A DMA beat an event triggers may write this TCC and so advance it to the
+// beat's time first, re-entering here: each step() leaves the next event planned before it
+// hands over its beats, so the events are handled one by one in time order.
+void Tcc::advance(uint64_t now_ps) {
+  while (now_ps >= next_ps_) step();
+}
+
 // "Single-Slope PWM Generation" (31.6.2.5): the counter counts from ZERO to TOP (PER), then wraps
 // to ZERO, setting INTFLAG.OVF; in NPWM the waveform output is set at ZERO and cleared on the
-// compare match with CCx (a CCx of 0 keeps it low; one above TOP keeps it high). A compare value
-// changed below the counter does not match until the next period: the output stays as it is.
-void Tcc::advance(uint64_t now_ps) {
-  if (!enabled() || hz_ == 0 || now_ps < next_ps_) return;
-  // Enabled means NPWM: enabling in another mode, or writing WAVE while enabled, stops the
-  // emulator (write()).
-  const uint64_t now = tick_at(now_ps);
-  while (true) {
-    const uint64_t end = period_start_ + period();  // the tick of the next wrap
-    const uint64_t upto = now < end ? now : end - 1;
-    for (unsigned c = 0; c < 4; ++c) {
-      const uint64_t match = period_start_ + cc_[c];
-      if (cc_[c] != 0 && match > processed_ && match <= upto) set_output(c, false, ps_at(match));
-    }
-    if (upto > processed_) processed_ = upto;
-    if (now < end) break;
+// compare match with CCx (a CCx of 0 keeps it low; one above TOP keeps it high). "Compare
+// Operations" (31.6.2.5): the counter is continuously compared to each CCx; a match sets
+// INTFLAG.MCx. A CCx of 0 equals the count at each wrap (not at the enable, where the count
+// starts rather than reaches 0): its flag is set then, with OVF. A compare value written at or
+// below the count (written_) does not match until the next period: the output stays as it is.
+void Tcc::step() {
+  const uint64_t tick = next_tick();
+  const uint64_t ps = ps_at(tick);
+  const uint64_t end = period_start_ + period();
+  unsigned matched = 0;  // bit x: MCx
+  if (tick == end) {
     intflag_ |= kTccOvf;
-    chip_.irq_changed();
     apply_buffers();
     period_start_ = end;
-    processed_ = end;
-    for (unsigned c = 0; c < 4; ++c) set_output(c, cc_[c] != 0, ps_at(end));
+    for (unsigned c = 0; c < channels_; ++c) {
+      set_output(c, cc_[c] != 0, ps);
+      if (cc_[c] == 0) matched |= 1u << c;
+    }
+  } else {
+    for (unsigned c = 0; c < channels_; ++c) {
+      if (period_start_ + cc_[c] != tick || tick <= written_[c]) continue;
+      matched |= 1u << c;
+      set_output(c, false, ps);
+    }
   }
+  processed_ = tick;
+  for (unsigned c = 0; c < channels_; ++c) {
+    if ((matched & (1u << c)) != 0) intflag_ |= mc(c);
+  }
+  chip_.irq_changed();
   plan_next();
+  // "DMA Operation" (31.6.4.x): "Match or Capture (MCx): for a compare channel, the request is
+  // set on each compare match detection". The DMAC's channels on these matches move their beats,
+  // stamped with the match's time.
+  unsigned triggers[kMaxChannels];
+  unsigned count = 0;
+  for (unsigned c = 0; c < channels_; ++c) {
+    if ((matched & dma_watch_ & (1u << c)) != 0) triggers[count++] = dma_trigger_base_ + 1 + c;
+  }
+  if (count != 0) chip_.dmac().timer_trigger(triggers, count, ps);
 }
 
 void Tcc::plan_next() {
-  next_ps_ = UINT64_MAX;
-  if (!enabled() || hz_ == 0) return;
-  uint64_t next = period_start_ + period();
-  for (unsigned c = 0; c < 4; ++c) {
-    const uint64_t match = period_start_ + cc_[c];
-    if (cc_[c] != 0 && match > processed_ && match < next) next = match;
-  }
-  next_ps_ = ps_at(next);
+  next_ps_ = enabled() && hz_ != 0 ? ps_at(next_tick()) : UINT64_MAX;
 }
 
 uint32_t Tcc::read(uint32_t offset, unsigned size) {
@@ -408,32 +452,29 @@ uint32_t Tcc::read(uint32_t offset, unsigned size) {
   view.set(0x34, count_, 4);
   view.set(0x3C, wave_, 4);
   view.set(0x40, per_, 4);
-  for (unsigned c = 0; c < 4; ++c) view.set(0x44 + 4 * c, cc_[c], 4);
+  for (unsigned c = 0; c < channels_; ++c) view.set(0x44 + 4 * c, cc_[c], 4);
   view.set(0x6C, perb_, 4);
-  for (unsigned c = 0; c < 4; ++c) view.set(0x70 + 4 * c, ccb_[c], 4);
+  for (unsigned c = 0; c < channels_; ++c) view.set(0x70 + 4 * c, ccb_[c], 4);
   return view.get(offset, size);
 }
 
 void Tcc::write(uint32_t offset, uint32_t value, unsigned size) {
-  advance(chip_.now_ps());
-  // No edge lies between the last one applied and now (advance() stops short of the next), so
-  // the counter is known to be past now's count: a compare value written below it must not
-  // match in this period.
-  if (enabled() && hz_ != 0) processed_ = std::max(processed_, tick_at(chip_.now_ps()));
+  // A DMAC beat writes at its own time (chip.h, access_ps), the CPU now.
+  const uint64_t now_ps = chip_.access_ps();
+  advance(now_ps);
   RegisterBytes w(0x80);
   w.set(offset, value, size);
-  const uint64_t sync_hz = chip_.channel_hz(kTccClockId);
+  const uint64_t sync_hz = chip_.channel_hz(clock_id_);
   const auto stall = [&] {
     if (sync_hz != 0) chip_.charge_stall(5, sync_hz);  // write-synchronised (31.6.8)
   };
-  const uint64_t now_ps = chip_.now_ps();
   if (touches(offset, size, 0x00, 4)) {
     RegisterBytes view(4);
     view.set(0, ctrla_, 4);
     view.set(offset, value, size);
     const uint32_t v = view.get(0, 4);
     if ((v & 1) != 0) {  // SWRST: every register to its reset value, the TCC disabled (31.8.1)
-      for (unsigned c = 0; c < 4; ++c) set_output(c, false, now_ps);
+      for (unsigned c = 0; c < channels_; ++c) set_output(c, false, now_ps);
       reset_registers();
       stall();
       chip_.irq_changed();
@@ -441,7 +482,7 @@ void Tcc::write(uint32_t offset, uint32_t value, unsigned size) {
       return;
     }
     if (enabled() && ((v ^ ctrla_) & ~3u) != 0) {
-      chip_.violation("write to TCC0 CTRLA's enable-protected fields while enabled "
+      chip_.violation("write to " + name_ + " CTRLA's enable-protected fields while enabled "
                       "(datasheet 31.8.1)");
       return;
     }
@@ -450,20 +491,22 @@ void Tcc::write(uint32_t offset, uint32_t value, unsigned size) {
     if (!was && enabled()) {
       hz_ = tick_hz();
       if (hz_ == 0) {
-        chip_.violation("TCC0 enabled without its generic clock (GCLK channel 0x1A off; datasheet 31.5.3)");
+        chip_.violation(name_ + " enabled without its generic clock (its GCLK channel off; "
+                        "datasheet 31.5.3)");
         return;
       }
       if ((wave_ & 7) != kWaveNpwm) {
-        chip_.violation("TCC0 waveform modes other than NPWM are not modelled (WAVE.WAVEGEN " +
+        chip_.violation(name_ + " waveform modes other than NPWM are not modelled (WAVE.WAVEGEN " +
                         std::to_string(wave_ & 7) + ")");
         return;
       }
       // The counter starts from COUNT (0 after a reset) when enabled (31.6.2.3).
       enable_ps_ = now_ps;
       period_start_ = processed_ = 0;
-      for (unsigned c = 0; c < 4; ++c) set_output(c, cc_[c] != 0, now_ps);
+      for (uint64_t& written : written_) written = 0;
+      for (unsigned c = 0; c < channels_; ++c) set_output(c, cc_[c] != 0, now_ps);
     } else if (was && !enabled()) {
-      for (unsigned c = 0; c < 4; ++c) set_output(c, false, now_ps);
+      for (unsigned c = 0; c < channels_; ++c) set_output(c, false, now_ps);
     }
     stall();
   }
@@ -473,23 +516,28 @@ void Tcc::write(uint32_t offset, uint32_t value, unsigned size) {
     ctrlb_ |= static_cast<uint8_t>(v & 0x1F);
     const unsigned command = v >> 5;
     if ((ctrlb_ & 1) != 0 || (ctrlb_ & 4) != 0) {
-      chip_.violation("TCC0 down-counting and one-shot operation (CTRLB.DIR, ONESHOT) are not modelled");
+      chip_.violation(name_ + " down-counting and one-shot operation (CTRLB.DIR, ONESHOT) are not "
+                      "modelled");
       return;
     }
     stall();
     if (command == 4) {
-      // READSYNC (31.8.3): COUNT is synchronised for reading; the bus waits for it (above).
-      count_ = static_cast<uint32_t>(enabled() ? tick_at(chip_.now_ps()) - period_start_ : count_);
+      // READSYNC (31.8.3): COUNT is synchronised for reading; the bus waits for it (above), and
+      // the counter may have wrapped meanwhile.
+      advance(chip_.access_ps());
+      if (enabled()) count_ = static_cast<uint32_t>(tick_at(chip_.access_ps()) - period_start_) & mask_;
     } else if (command == 3) {
       apply_buffers();  // UPDATE: the buffers now, as at a period's end
+      for (uint64_t& written : written_) written = tick_at(now_ps);
     } else if (command != 0) {
-      chip_.violation("TCC0 CTRLBSET.CMD " + std::to_string(command) + " (RETRIGGER/STOP) is not modelled");
+      chip_.violation(name_ + " CTRLBSET.CMD " + std::to_string(command) +
+                      " (RETRIGGER/STOP) is not modelled");
       return;
     }
   }
   if (touches(offset, size, 0x14, 4) || touches(offset, size, 0x18, 4) || touches(offset, size, 0x38, 2)) {
     if (w.get(offset, size) != 0) {
-      chip_.violation("TCC0 WEXCTRL, DRVCTRL and PATT (output matrix, dead time, inversion, "
+      chip_.violation(name_ + " WEXCTRL, DRVCTRL and PATT (output matrix, dead time, inversion, "
                       "patterns) are not modelled: written non-zero");
       return;
     }
@@ -500,37 +548,46 @@ void Tcc::write(uint32_t offset, uint32_t value, unsigned size) {
   if (touches(offset, size, 0x34, 4)) {
     stall();
     const uint64_t now = tick_at(now_ps);
-    const uint32_t v = w.get(0x34, 4) & 0xFFFFFF;
+    const uint32_t v = w.get(0x34, 4) & mask_;
     period_start_ = now >= v ? now - v : 0;
     processed_ = now;
   }
   if (touches(offset, size, 0x3C, 4)) {
     if (enabled()) {
-      chip_.violation("write to TCC0 WAVE while enabled (datasheet 31.8.11: enable-protected)");
+      chip_.violation("write to " + name_ + " WAVE while enabled (datasheet 31.8.11: "
+                      "enable-protected)");
       return;
     }
     wave_ = w.get(0x3C, 4);
     stall();
   }
   // PER and CCx written directly take effect at once; PERB and CCBx wait for the period's end
-  // ("Double Buffering", 31.6.2.6).
+  // ("Double Buffering", 31.6.2.6). Their bits above the counter's width do not exist (TCC2:
+  // 16 bits).
   if (touches(offset, size, 0x40, 4)) {
-    per_ = w.get(0x40, 4) & 0xFFFFFF;
+    per_ = w.get(0x40, 4) & mask_;
     stall();
   }
-  for (unsigned c = 0; c < 4; ++c) {
+  for (unsigned c = 0; c < channels_; ++c) {
     if (touches(offset, size, 0x44 + 4 * c, 4)) {
-      cc_[c] = w.get(0x44 + 4 * c, 4) & 0xFFFFFF;
+      const uint64_t at = tick_at(now_ps);
+      if (enabled() && at < processed_) {
+        chip_.violation(name_ + ": a CC" + std::to_string(c) + " write landing before the "
+                        "timer's last handled event is not modelled");
+        return;
+      }
+      cc_[c] = w.get(0x44 + 4 * c, 4) & mask_;
+      written_[c] = at;
       stall();
     }
     if (touches(offset, size, 0x70 + 4 * c, 4)) {
-      ccb_[c] = w.get(0x70 + 4 * c, 4) & 0xFFFFFF;
+      ccb_[c] = w.get(0x70 + 4 * c, 4) & mask_;
       buffer_valid_ |= ccbv(c);
       stall();
     }
   }
   if (touches(offset, size, 0x6C, 4)) {
-    perb_ = w.get(0x6C, 4) & 0xFFFFFF;
+    perb_ = w.get(0x6C, 4) & mask_;
     buffer_valid_ |= kPerbv;
     stall();
   }
