@@ -685,7 +685,7 @@ std::string last_reset_words(const Session& s) {
          ", predates it; protocol " + std::to_string(spec.since) + " reports it: reflash to see it)";
 }
 
-// "100000 steps/s together, 80000 while a motor ramps", or which part is assumed and why.
+// "150000 steps/s together, 150000 while a motor ramps", or which part is assumed and why.
 std::string step_budget_words(const Session& s) {
   const StepBudgets b = s.step_budgets_in_force();
   std::string out = std::to_string(b.constant) + " steps/s for the moving motors together, " +

@@ -165,20 +165,20 @@ Stats stats_of(uint16_t* a, uint32_t n) {
 
 // ---- fake HAL and port ------------------------------------------------------------------------
 
-// The main loop's HAL (StepScheduler::fill, start) on plain variables, and the step interrupt's
-// port doing what the SAMD21's (firmware/targets/samd21/step_fast_path.h) does in one register
-// access per call, on volatile variables: the armed STEP's end (CC1) one store, the DMA's mask
-// one store, a CPU-raised STEP two stores, SysTick one load, the compare one store (the chip's
+// The main loop's HAL (StepScheduler::fill, start) on plain variables, and each lane's step
+// interrupt port doing what the SAMD21's (firmware/targets/samd21/step_fast_path.h) does in one
+// register access per call, on volatile variables: the pulse's end one store, the DMA's mask one
+// store, a CPU-raised STEP two stores, SysTick one load, the compare one store (the chip's
 // write also waits for synchronisation), DIR one store. The pulses themselves are the DMA's.
-constexpr uint32_t kBenchCostTicks = 64;  // as Samd21StepPort::kCostTicks
+constexpr uint32_t kBenchCostTicks = 48;  // as Samd21StepPort::kCostTicks
 volatile uint32_t g_port = 0;     // OUTSET
 volatile uint32_t g_dir = 0;
 volatile uint32_t g_systick = 0;  // SysTick at the interrupt's entry
 volatile uint32_t g_wait_clock = 0u - 0x800000u;  // SysTick after a wait: far on
-volatile uint32_t g_compare = 0;  // CC0
-volatile uint32_t g_compare1 = 0;  // CC1: the pulse's end (the DMA lowers STEP there)
-volatile uint32_t g_set_mask = 0;  // what CC0's DMA raises
-volatile uint32_t g_armed = 0;    // set by arm(), cleared by the bench before each interrupt
+// Per lane (motor − 1):
+volatile uint32_t g_compare[3];   // CC0
+volatile uint32_t g_compare1[3];  // CC1: the pulse's end (the DMA lowers STEP there)
+volatile uint32_t g_set_mask[3];  // what CC0's DMA raises
 volatile uint32_t g_fired = 0;    // the interrupt is entered by the compare arm() set
 volatile uint32_t g_flags = 0;    // INTFLAG
 
@@ -196,27 +196,30 @@ class FakePins final : public hmc::hal::StepPins {
   void set_step(uint8_t motor, bool high) override { g_port = (uint32_t{motor} << 1) | high; }
 };
 
+template <uint8_t Lane>
 class BenchPort {
  public:
+  static constexpr uint8_t kLane = Lane;
   static constexpr uint32_t kCostTicks = kBenchCostTicks;
+  static constexpr uint32_t kReachTicks = hmc::fw::kMaxSegmentTicks;
   static constexpr bool kArmedStepsByHardware = true;
   explicit BenchPort(uint32_t now) : now_(now) {}
   bool event_fired(const hmc::fw::StepEngine&) { return g_fired != 0; }  // INTFLAG's load
   void ack_event() { g_flags = 1; }
-  void fired(uint8_t, uint32_t when) { g_compare1 = when + hmc::fw::kStepHighTicks; }  // CC1
-  void disarm() { g_set_mask = 0; }
-  void park(uint32_t now) { g_compare = now; }
+  void fired(uint32_t) {}  // the DMA raised STEP and set its end
+  void disarm() { g_set_mask[Lane] = 0; }
+  void park(uint32_t now) { g_compare[Lane] = now; }
   uint32_t take_entry() {
     g_flags = 3;
     return now_;
   }
-  void step_high(uint8_t motors, uint32_t near) {  // CC1 from the clock, then OUTSET
-    g_compare1 = near + ((g_systick - near) & 0xFFFFFFu) + hmc::fw::kStepHighTicks;
-    g_port = motors;
+  void step_high(uint32_t near) {  // CC1 from the clock, then OUTSET
+    g_compare1[Lane] = near + ((g_systick - near) & 0xFFFFFFu) + hmc::fw::kStepHighTicks;
+    g_port = Lane;
   }
   uint32_t stopwatch() { return g_systick; }
   uint32_t elapsed(uint32_t mark) { return (mark - g_systick) & 0xFFFFFFu; }
-  void step_low(uint8_t, uint32_t) {}  // the DMA ends the pulse
+  void step_low(uint32_t) {}  // the DMA ends the pulse
   void set_dir(uint8_t index, bool reverse) { g_dir = (uint32_t{index} << 1) | reverse; }
   // Time since entry on the fake SysTick (which says any wait is over at once): the SAMD21's
   // port reads a SysTick-based clock instead, one load more.
@@ -228,21 +231,27 @@ class BenchPort {
     while (ahead - static_cast<int32_t>((mark - g_wait_clock) & 0xFFFFFFu) > 0) {
     }
   }
-  void arm(uint32_t when, uint8_t motors) {
-    g_set_mask = motors;
-    g_compare = when;
-    g_armed = 1;
+  void arm(uint32_t when, bool step) {
+    g_set_mask[Lane] = step ? 1u << Lane : 0;
+    g_compare1[Lane] = when + hmc::fw::kStepHighTicks;
+    g_compare[Lane] = when;
+  }
+  void rearm(uint32_t when) {
+    g_compare1[Lane] = when + hmc::fw::kStepHighTicks;
+    g_compare[Lane] = when;
   }
 
  private:
   uint32_t now_;
 };
 
-// The interrupt as the SAMD21 runs it (run_step_fast_path): entered by the armed compare (the
-// bench sets g_fired) or by the main loop's kick (the counter's value: `now`).
+// A lane's interrupt as the SAMD21 runs it (run_step_express, then run_step_general): entered
+// by its armed compare (the bench sets g_fired) or by the main loop's kick (the counter's value:
+// `now`).
+template <uint8_t Lane>
 __attribute__((noinline)) void step_isr(void* engine, uint32_t now) {
-  BenchPort port(now);
-  hmc::fw::run_step_interrupt(*static_cast<hmc::fw::StepEngine*>(engine), port);
+  BenchPort<Lane> port(now);
+  hmc::fw::run_lane_interrupt(*static_cast<hmc::fw::StepEngine*>(engine), port);
 }
 
 #pragma GCC diagnostic push
@@ -339,25 +348,46 @@ Result play(const Scenario& sc) {
   const Fn fill = fill_fn();
   Ticks filled_at = 0;
   uint32_t fills = 0;
+  const Fn isr[3] = {step_isr<0>, step_isr<1>, step_isr<2>};
   for (;;) {
+    // The main loop's kick enters every lane's interrupt (as the board pends all three); else
+    // the lane whose armed compare comes first.
     Ticks at = ~Ticks{0};
+    uint8_t first = 0, last = 3;
     if (timer.due != ~Ticks{0}) {
-      at = timer.due;  // the main loop had the interrupt run at once
-    } else if (g_armed != 0) {
-      const int32_t d = static_cast<int32_t>(g_compare - static_cast<uint32_t>(timer.clock));
-      at = static_cast<Ticks>(static_cast<int64_t>(timer.clock) + d);
+      at = timer.due;
+      g_fired = 0;
     } else {
-      break;
+      int64_t soonest = INT64_MAX;
+      for (uint8_t i = 0; i < 3; ++i) {
+        if (sched.engine().lanes[i].compare == hmc::fw::kCompareIdle) continue;
+        const int32_t d = static_cast<int32_t>(g_compare[i] - static_cast<uint32_t>(timer.clock));
+        if (d < soonest) {
+          soonest = d;
+          first = i;
+        }
+      }
+      if (soonest == INT64_MAX) break;
+      at = static_cast<Ticks>(static_cast<int64_t>(timer.clock) + soonest);
+      last = static_cast<uint8_t>(first + 1);
+      g_fired = 1;
+    }
+    timer.due = ~Ticks{0};
+    if (at > timer.clock) timer.clock = at;
+    uint32_t n = 0;
+    for (uint8_t i = first; i < last; ++i) {
+      if (r.interrupts >= kMaxSteps) break;
+      n = instructions(isr[i], &sched.engine(), static_cast<uint32_t>(timer.clock));
+      if (r.interrupts < kMaxSamples) {
+        g_samples[r.interrupts] = static_cast<uint16_t>(n > 0xFFFF ? 0xFFFF : n);
+      }
+      r.isr_total += n;
+      ++r.interrupts;
     }
     if (r.interrupts >= kMaxSteps) {
       r.ok = false;
       break;
     }
-    g_fired = timer.due == ~Ticks{0} ? 1u : 0u;
-    timer.due = ~Ticks{0};
-    g_armed = 0;
-    if (at > timer.clock) timer.clock = at;
-    const uint32_t n = instructions(step_isr, &sched.engine(), static_cast<uint32_t>(timer.clock));
     uint32_t f = 0;
     if (sc.fill_every == 0 || timer.clock - filled_at >= sc.fill_every) {
       f = instructions(fill, &sched, 0);
@@ -365,12 +395,7 @@ Result play(const Scenario& sc) {
       if (fills < kMaxSamples) g_fill[fills] = static_cast<uint16_t>(f > 0xFFFF ? 0xFFFF : f);
       ++fills;
     }
-    if (r.interrupts < kMaxSamples) {
-      g_samples[r.interrupts] = static_cast<uint16_t>(n > 0xFFFF ? 0xFFFF : n);
-    }
-    r.isr_total += n;
     r.fill_total += f;
-    ++r.interrupts;
   }
   r.fills = fills;
   r.ticks = timer.clock - 1000;
@@ -587,7 +612,7 @@ int main() {
 
   calibrate();
 
-  line("The step interrupt (run_step_interrupt with a port of one register access per call, "
+  line("The step interrupt (run_lane_interrupt with a port of one register access per call, "
        "as the SAMD21's) and the main loop's StepScheduler::fill after each interrupt, "
        "instructions per call:");
   line("");

@@ -18,7 +18,7 @@ require_built "$images/hmc-firmware.elf" "$images/hmc-firmware-nobl.elf"
 ver='STX#1#VER#0#ETX'
 boot_out="STX#3#EVB#7#100#107#ETX
 STX#6#EVR#1#0#0#0#0#1#ETX
-STX#10#VER#7#100#0#128#100000#322#3#0#80000#80#ETX"
+STX#10#VER#7#100#0#128#150000#322#3#0#150000#16#ETX"
 for image in hmc-firmware hmc-firmware-nobl; do
   for clock in "" --no-crystal; do
     name="$image${clock:+ $clock}"

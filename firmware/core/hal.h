@@ -14,7 +14,8 @@ using Ticks = uint64_t;
 inline constexpr uint32_t kTicksPerSecond = 48000000;
 inline constexpr uint32_t kTicksPerMicrosecond = kTicksPerSecond / 1000000;
 
-// The free-running step timer and its one compare channel.
+// The free-running step clock, and the step interrupt's compares (one a motor on the board;
+// the simulator's one timer stands for them: StepScheduler::on_step_timer).
 class StepTimer {
  public:
   virtual ~StepTimer() = default;

@@ -226,17 +226,17 @@ static_assert(kSettingHomeLocate == kSettingCount, "one SettingId per kSettings 
 // The step budget, summed over the moving motors, from the real image's cycles in hmc-emu's
 // cycle model (docs/performance.md, "Cycles on the real image"; scripts/bench cycles). The rule:
 // the step interrupt uses at most half the 48 MHz CPU at the budget (24 000 000 cycles a second).
-//  - Constant rate: STEP pulses made by the DMA, 204-219 cycles a step (one motor; three on
-//    their own grids), 212 with three at 40 us: half the CPU allows 109 000-113 000 steps/s.
-//    100 000 takes two of the spec's 20 us moves at once; the third is refused (three at 20 us,
-//    150 000 steps/s, measured 197 cycles a step: 61.6 % of the CPU).
-//  - Ramping: the interrupt's 219-238 cycles a ramping step (at most 100 000 by the rule) and
-//    the main loop's fill(), 116-240 cycles a ramping step with ramp segments (with cruise; pure
-//    triangles): at 80 000 at most 40 % and 19-40 % of the CPU, the rest for the parser, replies
-//    and LEDs.
+// One compare timer per motor and an express entry (step_engine.h):
+//  - Constant rate: 129-138 cycles a step (three at the spec's 20 us: 129, 40.4 % of the CPU;
+//    one motor, or three on their own grids: 138). 150 000 takes the spec's 20 us move on every
+//    motor at once (at 138 cycles a step, 43 % of the CPU).
+//  - Ramping: 149-153 cycles a ramping step (one motor; three ramping toward 76 us; three
+//    toward 20 us at 50 000 steps/s²): at 150 000 at most 48 % of the CPU. The main loop keeps
+//    the rings full meanwhile (three motors ramping to 20 us: every interval monotone, none
+//    dry).
 // VER reports both (max_rate, max_ramping_rate).
-inline constexpr uint32_t kMaxStepRate = 100000;
-inline constexpr uint32_t kMaxRampingStepRate = 80000;  // when any moving motor ramps
+inline constexpr uint32_t kMaxStepRate = 150000;
+inline constexpr uint32_t kMaxRampingStepRate = 150000;  // when any moving motor ramps
 // The step timer's shortest and longest interval at 48 ticks a µs: 240 ticks, 2^32 - 1 ticks.
 inline constexpr uint32_t kShortestDelayUs = 5;
 inline constexpr uint32_t kLongestDelayUs = 89478485;

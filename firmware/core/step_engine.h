@@ -8,42 +8,49 @@
 // clock with signed differences (an event is at most kMaxSegmentTicks after the previous one;
 // the main loop splits longer waits into events without a step).
 //
-// One event, one interrupt, and no pulse to time on the CPU. Each interrupt ends by working out
-// the next event: its time (`next_when`, the compare it arms), the motors due then (`next_due`)
-// and which of them step (`next_steps`); arming it tells the port which STEP pins rise at the
-// compare. On the SAMD21 the compare's match raises them by DMA at that exact tick and sets a
-// second compare to the event's time + kStepHighTicks, whose match lowers them
-// (targets/samd21/step_pulses.h): the pulse is made by hardware. The next entry, when the armed
-// compare alone brought it there and the main loop asked for nothing, has no pulse to make
-// (`fired` does nothing on the board; on the host it raises STEP) and does the bookkeeping: DIR
-// for a due DIR event, each due motor's next event (only the due ones are visited), the
-// earliest event left and its masks, the compare. Any other entry (the main loop's kick: a
-// halt, a refilled ring, an overdue event; the timer's overflow) first disarms the hardware's
-// STEP (`disarm`) and parks the compare (`park`), takes an armed event that came meanwhile as
-// made (its STEP may have risen: it is counted before a halt could drop it), then takes the
-// main loop's requests, the clock as "now", and steps the motors due by then with the CPU
-// (`step_high`). An event closer than the interrupt's own cost (Port::kCostTicks) is waited for
-// inside the interrupt and raised by the CPU. STEP is high at least kStepHighTicks (DRV8711
-// datasheet, SLVSC40, "Timing Requirements": STEP high ≥ 1.9 µs, low ≥ 1.9 µs, DIR setup and
-// hold 200 ns around a STEP edge).
+// One compare per motor, one interrupt per event, and no pulse to time on the CPU. Each lane
+// (motor) has its own timer compare and interrupt (on the SAMD21: TC4 for motor 1, TCC1 for
+// motor 2, TCC2 for motor 3, targets/samd21/step_timer.h); the lanes' interrupts share one
+// priority, so none preempts another, and each touches its own lane's hardware. Each interrupt
+// ends by arming its lane's next event: the compare at its time, telling the port whether STEP
+// rises then. On the SAMD21 the compare's match raises the lane's STEP by DMA at that exact tick
+// and sets the lane's second compare to the event's time + kStepHighTicks, whose match lowers
+// it (targets/samd21/step_pulses.h): the pulse is made by hardware, and no other motor's event
+// can delay it. The next entry, when the armed compare brought it there and the main loop asked
+// nothing of the lane, has no pulse to make (`fired` does nothing on the board; on the host it
+// raises STEP) and does the bookkeeping: DIR for a due DIR event, the lane's next event, the
+// compare. An event beyond the compare's counter's reach (Port::kReachTicks: TCC2 counts 16
+// bits) is reached through relays: compares on the way that step nothing. Any other entry with
+// a request from the main loop (a halt, a refilled ring, an overdue event) first disarms the
+// lane's STEP (`disarm`) and parks its compare (`park`), takes an armed event that came
+// meanwhile as made (its STEP may have risen: it is counted before a halt could drop it), then
+// takes the requests and the clock as "now". An entry with neither (another lane's kick, a
+// parked compare come round with its counter) only clears its flag. An event closer than the
+// interrupt's own cost (Port::kCostTicks) is waited for inside the interrupt and raised by the
+// CPU (`step_high`). STEP is high at least kStepHighTicks (DRV8711 datasheet, SLVSC40, "Timing
+// Requirements": STEP high ≥ 1.9 µs, low ≥ 1.9 µs, DIR setup and hold 200 ns around a STEP
+// edge).
 //
 // Port (a template parameter, so the board's registers are reached directly): the SAMD21's
 // Samd21StepPort (targets/samd21/step_fast_path.h) or HalStepPort (step_scheduler_isr.cpp, over
 // the HAL interfaces, for the simulator and the tests). It provides:
+//   static constexpr uint8_t kLane;              // the lane whose interrupt this is: 0..2
 //   static constexpr uint32_t kCostTicks;
+//   static constexpr uint32_t kReachTicks;      // an event at most this far ahead is armed
+//                                                // directly (≥ kMaxSegmentTicks: no relays)
 //   static constexpr bool kArmedStepsByHardware;  // an armed compare raises STEP by itself
-//   bool event_fired(const StepEngine&);         // entered by the armed compare alone
-//   void ack_event();                            // then: clears the compare's flag
-//   void fired(uint8_t motors, uint32_t when);   // the armed compare's STEP on `motors` at
-//                                                // `when` (made by hardware, or raised here)
+//   bool event_fired(const StepEngine&);         // the lane's compare has matched
+//   void ack_event();                            // clears the compare's flag
+//   void fired(uint32_t when);                   // the armed compare's STEP at `when` (made
+//                                                // by hardware, or raised here)
 //   void disarm();                               // the armed compare raises no STEP from here
 //   void park(uint32_t now);                     // and does nothing more: moved to `now`
-//   uint32_t take_entry();                       // otherwise: clears what entered; the clock
-//   void step_high(uint8_t motors, uint32_t near);  // STEP rises now (`near`: a time within
-//                                                // 2^23 ticks of now); bit m−1 for motor m;
-//                                                // the pulse ends ≥ kStepHighTicks later
+//   uint32_t take_entry();                       // clears the compare's flag; the clock
+//   void step_high(uint32_t near);               // STEP rises now (`near`: a time within 2^23
+//                                                // ticks of now); the pulse ends
+//                                                // ≥ kStepHighTicks later
 //   uint32_t stopwatch();                        // a mark on a free-running tick count
-//   void step_low(uint8_t motors, uint32_t mark);  // a pulse the CPU ends, kStepHighTicks after
+//   void step_low(uint32_t mark);                // a pulse the CPU ends, kStepHighTicks after
 //                                                // mark (nothing where hardware ends it)
 //   void set_dir(uint8_t index, bool reverse);   // index 0..2
 //   // The clock against the event times: ticks from now until `when`, and a wait until then.
@@ -51,13 +58,14 @@
 //   // that measures the time since entry rather than reading a clock.
 //   int32_t ticks_until(uint32_t when, uint32_t entry, uint32_t entry_mark);
 //   void wait_until(uint32_t when, uint32_t entry, uint32_t entry_mark);
-//   void arm(uint32_t when, uint8_t motors);     // the interrupt (and STEP on `motors`) at
+//   void arm(uint32_t when, bool step);          // the compare (and STEP, if `step`) at
 //                                                // `when`, ≥ kCostTicks away
+//   void rearm(uint32_t when);                   // the same, STEP as the event just made
 //
 // Ring protocol (one core, no locks): the main loop writes a segment, then advances `tail`; the
 // interrupt reads a segment, then advances `head`. A motor whose ring ran dry while moving waits
-// (not armed) and counts a starved event; the main loop's next push re-arms it through
-// `pending`. A halt empties the ring in the interrupt; segments the main loop pushes afterwards
+// (not armed) and counts a starved event; the main loop's next push re-arms it through the
+// lane's `pending`. A halt empties the ring in the interrupt; segments the main loop pushes afterwards
 // that do not start a move are dropped.
 //
 // Code placement: on the board (ARMv6-M) the per-event code goes to .ramfunc, which the linker
@@ -65,6 +73,7 @@
 // per-event helpers into the interrupt.
 #pragma once
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "ramp.h"
@@ -96,13 +105,15 @@ inline constexpr uint8_t kSegRamp = 64;
 // The longest time between two events: beyond it the main loop adds events without a step, so
 // a signed 32-bit difference always orders two pending times.
 inline constexpr uint32_t kMaxSegmentTicks = uint32_t{1} << 30;
-// A segment of this many events never ends (an endless cruise).
-inline constexpr uint32_t kEndlessEvents = 0xFFFFFFFFu;
 inline constexpr uint8_t kRingSize = 32;  // a power of two
+// The express entry (run_lane_express) takes events less than this far apart (2^20 ticks, 22 ms):
+// well within the reach of the SysTick-based clock the board's port measures them with.
+inline constexpr uint32_t kExpressBits = 20;
+inline constexpr uint32_t kExpressTicks = uint32_t{1} << kExpressBits;
 
 struct StepSegment {
   uint32_t interval;      // ticks after the previous event (kSegStart: the first event's time)
-  uint32_t count;         // events, ≥ 1 (kEndlessEvents: endless); 0 with kSegEnd
+  uint32_t count;         // events, ≥ 1; 0 with kSegEnd (an endless cruise is pushed in runs)
   // kSegStart, kSegMove: position change per step (1/256 step, signed). kSegRamp: the
   // accumulator's fraction after the previous step (Q0.16, its bits).
   int16_t position_step;
@@ -111,54 +122,75 @@ struct StepSegment {
   int32_t add;            // kSegRamp: Q16.16 added to the interval after each step
 };
 
-// One motor's share of the interrupt (its next event's time and whether it has one are in
-// StepEngine, where the interrupt looks for the earliest). Byte fields first, then words, the
-// ring last: on the M0+ a byte load reaches 31 bytes past its base register, a word load 124,
-// so every field the interrupt uses is one load from the lane's address.
+// One motor's share of the interrupt (whether its next event steps, and whether it has one, are
+// StepEngine's masks). Byte fields first, then words, the ring last: on the M0+ a byte load
+// reaches 31 bytes past its base register, a word load 124, so every field the interrupt uses
+// is one load from the lane's address.
 struct StepLane {
+  // The first word is what the express entry checks, in one load (kExpressPlain, kExpressRamp).
+  uint8_t compare;       // what the lane's compare is armed for: kCompareIdle, Event or Relay
   uint8_t flags;       // of the playing segment
+  uint8_t pending;       // set by the main loop (a halt, a push for a waiting lane), cleared here
+  uint8_t halt_request;  // written by the main loop: 0x80 | the MoveEnd to halt with, 0 none
   uint8_t moving;      // a move is playing (from its start segment to its end segment)
   uint8_t end;         // the last motion's MoveEnd
-  uint8_t halt_request;  // written by the main loop: 0x80 | the MoveEnd to halt with, 0 none
   uint8_t halt_upto;     // the main loop's tail when it asked: the halt drops segments before it
   uint8_t head;          // written by the interrupt
   uint8_t tail;          // written by the main loop
   int16_t position_step;
+  uint32_t next;       // the lane's next event; its last event's while not armed
   uint32_t interval;   // of the playing segment (a ramp segment's: the next step's, Q16.16)
   uint32_t left;       // events of the playing segment from `next` on (a ramp segment: 1)
   // A ramp segment's steps after `next`, its add, and the fraction of a tick `next` carries.
   uint32_t ramp_left;
   int32_t add;
   uint32_t fraction;
-  uint32_t total;        // steps since power-up (wraps)
-  uint32_t last_step;    // time of the last step
-  uint32_t last_interval;  // between the last two steps, 0 at rest
-  // A step counts only `total`: the position (1/256 step) is position_at + (total − total_at) ×
-  // position_step, the current move's steps total − fired_from. A segment that changes
-  // position_step folds the steps so far into position_at first and counts a fold, so the main
-  // loop reads a consistent set by reading `folds` before and after (StepScheduler::counts).
+  uint32_t relay_at;   // kCompareRelay: the relay's time
+  // An event counts only `left` (and a ramp step `ramp_left`). The steps since power-up, the
+  // last step's time and the interval before it are derived where they are read (lane_steps):
+  // count − left − ramp_left steps since the last fold, and these three hold the values at the
+  // fold. load_segment and a halt fold (fold_steps: count 0); a plain segment after a plain
+  // one, taken in advance(), adds its events to `count` instead.
+  uint32_t count;          // events since the last fold, the playing segment's included
+  uint32_t total;          // steps since power-up at the last fold (wraps)
+  uint32_t last_step;      // time of the last step then
+  uint32_t last_interval;  // between the last two steps then, 0 at rest
+  // The position (1/256 step) is position_at + (total − total_at) × position_step, the current
+  // move's steps total − fired_from (total as lane_steps derives it). A segment that changes
+  // position_step folds the steps so far into position_at first.
   int32_t position_at;
   uint32_t total_at;
   uint32_t fired_from;
+  // Folds so far: the main loop reads a consistent set by reading `folds` and the lane's next
+  // event (which every event moves) before and after (StepScheduler's lane_snapshot).
   uint32_t folds;
   uint32_t finished;       // motions ended so far
   uint32_t halts;          // halts taken (one may have dropped a DIR change)
   StepSegment ring[kRingSize];
 };
 
-// Byte fields first (a byte load reaches 31 bytes past its base on the M0+), then words.
+// What a lane's compare is armed for (StepLane::compare).
+inline constexpr uint8_t kCompareIdle = 0;   // nothing: parked, raising nothing
+inline constexpr uint8_t kCompareEvent = 1;  // the lane's next event, StepLane::next
+inline constexpr uint8_t kCompareRelay = 2;  // relay_at, on the way to a `next` beyond its reach
+
+// A lane's first word (compare, flags, pending, halt_request, little-endian) when the express
+// entry may take its event: a plain run's or a ramp segment's, armed, nothing asked. (The plain
+// one is a compare with an immediate on the M0+.)
+inline constexpr uint32_t kExpressPlain = kCompareEvent;
+inline constexpr uint32_t kExpressRamp = kExpressPlain | uint32_t{kSegRamp} << 8;
+static_assert(offsetof(StepLane, compare) == 0 && offsetof(StepLane, flags) == 1 &&
+                  offsetof(StepLane, pending) == 2 && offsetof(StepLane, halt_request) == 3,
+              "the express entry reads these four bytes as one word");
+
+// Byte fields first (a byte load reaches 31 bytes past its base on the M0+), then words. The
+// lanes' interrupts share one priority (none preempts another), so the masks below, written by
+// each for its own bit, need no lock.
 struct StepEngine {
-  uint8_t pending;     // set by the main loop: a halt or a push for a waiting motor
-  // The next event, as the last interrupt left it (read first by the next one).
-  uint8_t next_steps;  // the motors whose STEP rises then
-  uint8_t next_due;    // the motors due then (stepping, DIR or waiting)
-  uint8_t next_armed;  // the compare is armed for next_when
-  // Per motor (bit i for lane i): `next[i]` is a pending event; its segment steps (not a DIR
+  // Per motor (bit i for lane i): the lane's `next` is a pending event; its segment steps (not a DIR
   // change, not a wait).
   uint8_t armed;
   uint8_t stepping;
-  uint32_t next_when;  // the next event's time: the compare armed, when next_armed
-  uint32_t next[3];    // each lane's next event; its last event's while not armed
   uint32_t starved;    // events that found their ring empty (0 when the main loop keeps up)
   StepLane lanes[3];
 };
@@ -186,34 +218,93 @@ HMC_STEP_INLINE void fold_position(StepLane& lane, int16_t position_step) {
   lane.position_at = static_cast<int32_t>(at + (total - lane.total_at) * step);
   lane.total_at = total;
   lane.position_step = position_step;
+}
+
+// A ramp segment's state one event back: the interval and fraction before the step that made
+// the event, and that event's ticks after the one before it (ramp_step undone; the fraction
+// before is the one whose sum with the interval leaves the fraction after).
+HMC_STEP_INLINE uint32_t ramp_back(uint32_t& fraction, uint32_t& interval, uint32_t add) {
+  interval -= add;
+  fraction = (fraction - interval) & 0xFFFFu;
+  return (fraction + interval) >> 16;
+}
+
+// What per-step counters would hold (StepLane): steps since power-up, the last step's time and
+// the interval between the last two steps.
+struct LaneSteps {
+  uint32_t total;
+  uint32_t last_step;
+  uint32_t last_interval;
+};
+
+// Steps since the last fold.
+HMC_STEP_INLINE uint32_t steps_since_fold(const StepLane& lane) {
+  if ((lane.flags & (kSegDir | kSegNoStep)) != 0) return 0;
+  return lane.count - lane.left - lane.ramp_left;
+}
+
+// Derives them from the lane and its next event `next` (the last event's time once the segment
+// has played out: left 0).
+HMC_STEP_INLINE LaneSteps lane_steps(const StepLane& lane, uint32_t next) {
+  LaneSteps s{lane.total, lane.last_step, lane.last_interval};
+  const uint32_t done = steps_since_fold(lane);
+  if (done == 0) return s;
+  uint32_t last = next;
+  uint32_t interval = lane.interval;
+  if ((lane.flags & kSegRamp) != 0) {
+    uint32_t fraction = lane.fraction;
+    const uint32_t add = static_cast<uint32_t>(lane.add);
+    if (lane.left != 0) last -= ramp_back(fraction, interval, add);
+    interval = ramp_back(fraction, interval, add);
+  } else if (lane.left != 0) {
+    last -= interval;
+  }
+  s.total += done;
+  s.last_step = last;
+  // The first step since the fold follows the last one before it (after a wait, a DIR change,
+  // the start); a later one follows a step of the same segment (or of the plain one before).
+  s.last_interval = done == 1 ? last - lane.last_step : interval;
+  return s;
+}
+
+// The playing segment's steps go into the lane's counts (`next` as lane_steps takes it).
+HMC_STEP_INLINE void fold_steps(StepLane& lane, uint32_t next) {
+  const LaneSteps s = lane_steps(lane, next);
+  lane.total = s.total;
+  lane.last_step = s.last_step;
+  lane.last_interval = s.last_interval;
+  lane.count = 0;
+  lane.left = 0;
+  lane.ramp_left = 0;
   ++lane.folds;
 }
 
 // A ramp segment's next step after the event at `at`: adds only (ramp.h, "Ramp segments").
-HMC_STEP_INLINE void ramp_step(StepEngine& e, uint8_t i, StepLane& lane, uint32_t at) {
+HMC_STEP_INLINE void ramp_step(StepLane& lane, uint32_t at) {
   const uint32_t sum = lane.fraction + lane.interval;
-  e.next[i] = at + (sum >> 16);
+  lane.next = at + (sum >> 16);
   lane.fraction = sum & 0xFFFFu;
   lane.interval += static_cast<uint32_t>(lane.add);
   lane.left = 1;
 }
 
 // Starts playing ramp segment `seg` after the event at `at`.
-HMC_STEP_INLINE void begin_ramp(StepEngine& e, uint8_t i, StepLane& lane, const StepSegment& seg,
+HMC_STEP_INLINE void begin_ramp(StepLane& lane, const StepSegment& seg,
                                 uint32_t at) {
   lane.fraction = static_cast<uint16_t>(seg.position_step);
   lane.interval = seg.interval;
   lane.add = seg.add;
   lane.ramp_left = seg.count - 1;
-  ramp_step(e, i, lane, at);
+  ramp_step(lane, at);
 }
 
-// Takes lane i's next segment, next[i] holding the last event's time. Drops what is left of a
+// Takes lane i's next segment, its `next` holding the last event's time. Drops what is left of a
 // halted move; passes end markers. Leaves the lane armed on its next event, or not armed.
 // Per segment (a ramp segment's start included): in RAM on the board.
 HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
   StepLane& lane = e.lanes[i];
   const uint8_t bit = uint8_t(1u << i);
+  fold_steps(lane, e.lanes[i].next);
   for (;;) {
     const uint8_t head = lane.head;
     if (head == load8(lane.tail)) {
@@ -228,7 +319,7 @@ HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
       lane.moving = 1;
       fold_position(lane, seg.position_step);
       lane.fired_from = lane.total;
-      e.next[i] = seg.interval;
+      e.lanes[i].next = seg.interval;
       lane.last_step = seg.interval;
     } else if ((flags & kSegEnd) != 0) {
       if (lane.moving != 0 && seg.end != 0) {
@@ -245,7 +336,8 @@ HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
       store8(lane.head, static_cast<uint8_t>(head + 1));
       continue;
     } else if ((flags & kSegRamp) != 0) {
-      begin_ramp(e, i, lane, seg, e.next[i]);
+      lane.count = seg.count;
+      begin_ramp(lane, seg, lane.next);
       lane.flags = flags;
       e.armed = uint8_t(e.armed | bit);
       e.stepping = uint8_t(e.stepping | bit);
@@ -253,15 +345,15 @@ HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
       store8(lane.head, static_cast<uint8_t>(head + 1));
       return;
     } else {
-      e.next[i] += seg.interval;
+      e.lanes[i].next += seg.interval;
       if ((flags & kSegMove) != 0) {
         fold_position(lane, seg.position_step);
         lane.fired_from = lane.total;
       }
     }
     lane.interval = seg.interval;
+    lane.count = seg.count;
     lane.left = seg.count;
-    lane.ramp_left = 0;
     lane.flags = flags;
     e.armed = uint8_t(e.armed | bit);
     if ((flags & (kSegDir | kSegNoStep)) == 0) {
@@ -275,44 +367,38 @@ HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
   }
 }
 
-// The main loop's requests: halts first, then motors waiting for their ring.
-inline void take_requests(StepEngine& e) {
-  for (uint8_t i = 0; i < 3; ++i) {
-    StepLane& lane = e.lanes[i];
-    const uint8_t bit = uint8_t(1u << i);
-    const uint8_t halt = load8(lane.halt_request);
-    if (halt != 0) {
-      store8(lane.halt_request, 0);
-      const uint8_t upto = load8(lane.halt_upto);
-      if (static_cast<uint8_t>(upto - lane.head) <= kRingSize) store8(lane.head, upto);
-      const uint8_t end = halt & 0x7Fu;
-      if (lane.moving != 0 && end != 0) {
-        lane.end = end;
-        ++lane.finished;
-      }
-      lane.moving = 0;
-      e.armed = uint8_t(e.armed & ~bit);
-      lane.last_interval = 0;
-      lane.ramp_left = 0;
-      ++lane.halts;
+// The main loop's requests for lane i: a halt first, then a ring to take up. Called on the
+// interrupt's slow entry only: out of line, so its registers are not the fast path's.
+HMC_STEP_RAMFUNC inline void take_lane_requests(StepEngine& e, uint8_t i) {
+  StepLane& lane = e.lanes[i];
+  const uint8_t bit = uint8_t(1u << i);
+  const uint8_t halt = load8(lane.halt_request);
+  if (halt != 0) {
+    store8(lane.halt_request, 0);
+    const uint8_t upto = load8(lane.halt_upto);
+    if (static_cast<uint8_t>(upto - lane.head) <= kRingSize) store8(lane.head, upto);
+    fold_steps(lane, e.lanes[i].next);  // before the rest: a halted lane's last interval is 0
+    const uint8_t end = halt & 0x7Fu;
+    if (lane.moving != 0 && end != 0) {
+      lane.end = end;
+      ++lane.finished;
     }
-    if ((e.armed & bit) == 0) load_segment(e, i);
+    lane.moving = 0;
+    e.armed = uint8_t(e.armed & ~bit);
+    lane.last_interval = 0;
+    ++lane.halts;
   }
+  if ((e.armed & bit) == 0) load_segment(e, i);
 }
 
 // Lane i's due event is done (STEP raised if it steps): account for it, take the next.
-HMC_STEP_INLINE void advance(StepEngine& e, uint8_t i, uint8_t bit) {
+HMC_STEP_INLINE void advance(StepEngine& e, uint8_t i) {
   StepLane& lane = *based(&e.lanes[i]);
-  const uint32_t at = e.next[i];
-  if (HMC_STEP_LIKELY((e.stepping & bit) != 0)) {
-    ++lane.total;
-    lane.last_interval = at - lane.last_step;
-    lane.last_step = at;
-  }
-  if (HMC_STEP_UNLIKELY(lane.left != kEndlessEvents && --lane.left == 0)) {
+  const uint32_t at = e.lanes[i].next;
+  if (HMC_STEP_UNLIKELY(--lane.left == 0)) {
     if (lane.ramp_left != 0) {  // a ramp segment's next step
       --lane.ramp_left;
-      ramp_step(e, i, lane, at);
+      ramp_step(lane, at);
       return;
     }
     // A plain segment after a plain one: taken here, without the call; anything else (a ramp
@@ -321,9 +407,13 @@ HMC_STEP_INLINE void advance(StepEngine& e, uint8_t i, uint8_t bit) {
     if (lane.flags == 0 && head != load8(lane.tail)) {
       fence();
       const StepSegment& seg = lane.ring[head & (kRingSize - 1)];
-      if (seg.flags == 0) {
-        e.next[i] = at + seg.interval;
+      // Not folded: `count` goes on counting, unless it would wrap (then count − left could
+      // read 0 steps after 2³² of them).
+      const uint32_t count = lane.count + seg.count;
+      if (seg.flags == 0 && count >= seg.count) {
+        e.lanes[i].next = at + seg.interval;
         lane.interval = seg.interval;
+        lane.count = count;
         lane.left = seg.count;
         fence();
         store8(lane.head, static_cast<uint8_t>(head + 1));
@@ -332,168 +422,229 @@ HMC_STEP_INLINE void advance(StepEngine& e, uint8_t i, uint8_t bit) {
     }
     load_segment(e, i);
   } else {
-    e.next[i] = at + lane.interval;
+    e.lanes[i].next = at + lane.interval;
   }
 }
 
-// One pass of the interrupt, STEP high on `steps` since `mark`: the due motors' DIR and next
-// events, the earliest event left (e.next_when, next_due, next_steps), its compare (or none),
-// the end of a pulse the CPU times.
-// False when that event is too close to leave for: the caller waits for it and passes again.
+// Lane i's due event is done (STEP raised if it steps): its DIR, then its next event.
 template <class Port>
-HMC_STEP_INLINE void step_lanes(StepEngine& e, Port& port, uint8_t due) {
-#pragma GCC unroll 3
-  for (uint8_t i = 0; i < 3; ++i) {
-    const uint8_t bit = uint8_t(1u << i);
-    if ((due & bit) == 0) continue;
-    const uint8_t flags = e.lanes[i].flags;
-    if (HMC_STEP_UNLIKELY((flags & kSegDir) != 0)) port.set_dir(i, (flags & kSegReverse) != 0);
-    advance(e, i, bit);
-  }
+HMC_STEP_INLINE void step_lane(StepEngine& e, Port& port, uint8_t i) {
+  const uint8_t flags = e.lanes[i].flags;
+  if (HMC_STEP_UNLIKELY((flags & kSegDir) != 0)) port.set_dir(i, (flags & kSegReverse) != 0);
+  advance(e, i);
 }
 
+// An event `ahead` ticks away is beyond the compare's reach (never where it reaches every event
+// time, kMaxSegmentTicks: a signed compare with a reach of 2^31 would wrap).
 template <class Port>
-HMC_STEP_INLINE bool step_pass(StepEngine& e, Port& port, uint8_t due, uint8_t steps, uint32_t now,
-                               uint32_t entry, uint32_t entry_mark, uint32_t mark, bool waited) {
-  // The due motors' DIR and next events.
-  step_lanes(e, port, due);
-  // The earliest event left and the motors due then.
-  int32_t best = 0x7FFFFFFF;
-  uint8_t next_due = 0;
-  const uint8_t armed = e.armed;
-#pragma GCC unroll 3
-  for (uint8_t i = 0; i < 3; ++i) {
-    const uint8_t bit = uint8_t(1u << i);
-    if ((armed & bit) == 0) continue;
-    const int32_t d = static_cast<int32_t>(e.next[i] - now);
-    if (d < best) {
-      best = d;
-      next_due = bit;
-    } else if (d == best) {
-      next_due |= bit;
-    }
-  }
-  const uint8_t next_steps = next_due & e.stepping;
-  const uint32_t when = now + static_cast<uint32_t>(best);
-  e.next_when = when;
-  e.next_due = next_due;
-  e.next_steps = next_steps;
-  // Time has passed since entry: compare what is left. The port's clock and waits count from
-  // the entry (or read the clock), not from `now`, which moves on with each pass: measured from
-  // `now`, a second pass found every event already due and stepped the ring empty as fast as
-  // the CPU ran.
-  bool leave = true;
-  if (HMC_STEP_LIKELY(next_due != 0)) {
-    if (HMC_STEP_LIKELY(port.ticks_until(when, entry, entry_mark) >=
-                        static_cast<int32_t>(Port::kCostTicks))) {
-      port.arm(when, next_steps);
-      // After a wait inside, the old compare (an event this interrupt has made) may have matched
-      // meanwhile: its flag would bring the next entry in early, to raise STEP for `when` at
-      // once. The old value is past, so no match comes before the new one is live.
-      if (HMC_STEP_UNLIKELY(waited)) port.ack_event();
-      e.next_armed = 1;
-    } else {
-      leave = false;
-    }
+HMC_STEP_INLINE bool beyond_reach(int32_t ahead) {
+  if constexpr (Port::kReachTicks >= kMaxSegmentTicks) {
+    return false;
   } else {
-    port.disarm();  // nothing armed: the compare matches again only after the counter's wrap
-    e.next_armed = 0;
+    return ahead >= static_cast<int32_t>(Port::kReachTicks);
   }
-  if (steps != 0) port.step_low(steps, mark);
-  return leave;
 }
 
-// Due before the interrupt could return and come back: waits for the event step_pass left in
-// the engine, raises its STEP, and makes it the next pass's.
+// Arms lane i's compare for its next event (or a relay on the way to it, or nothing when the
+// lane has no event). False when the event is closer than the interrupt's own cost: the caller
+// waits for it and raises it. Time has passed since entry, so the port's clock counts from the
+// entry (or reads the clock), never from the event just made.
 template <class Port>
-HMC_STEP_INLINE void next_waited_event(StepEngine& e, Port& port, uint32_t entry,
-                                       uint32_t entry_mark, uint32_t& now, uint8_t& due,
-                                       uint8_t& steps, uint32_t& mark) {
-  const uint32_t when = e.next_when;
-  port.wait_until(when, entry, entry_mark);
-  now = when;
-  due = e.next_due;
-  steps = e.next_steps;
-  if (steps != 0) port.step_high(steps, when);
-  mark = port.stopwatch();
+HMC_STEP_INLINE bool arm_lane(StepEngine& e, StepLane& lane, Port& port, uint8_t i,
+                              uint32_t entry, uint32_t entry_mark, bool waited) {
+  const uint8_t bit = uint8_t(1u << i);
+  if (HMC_STEP_UNLIKELY((e.armed & bit) == 0)) {
+    port.disarm();  // the compare matches again only after its counter's wrap, raising nothing
+    lane.compare = kCompareIdle;
+    return true;
+  }
+  const uint32_t when = e.lanes[i].next;
+  const int32_t ahead = port.ticks_until(when, entry, entry_mark);
+  if (HMC_STEP_UNLIKELY(ahead < static_cast<int32_t>(Port::kCostTicks))) return false;
+  if (HMC_STEP_UNLIKELY(beyond_reach<Port>(ahead))) {
+    // Beyond the compare's counter's reach: an entry on the way that steps nothing.
+    const uint32_t at = when - static_cast<uint32_t>(ahead) + Port::kReachTicks;
+    lane.relay_at = at;
+    port.arm(at, false);
+    lane.compare = kCompareRelay;
+  } else {
+    port.arm(when, (e.stepping & bit) != 0);
+    lane.compare = kCompareEvent;
+  }
+  // After a wait inside, the old compare (an event this interrupt has made) may have matched
+  // meanwhile: its flag would bring the next entry in early. The old value is past, so no
+  // match comes before the new one is live.
+  if (HMC_STEP_UNLIKELY(waited)) port.ack_event();
+  return true;
 }
 
 }  // namespace step_engine_detail
 
-// The step timer's interrupt (see the top of this file).
+// The express entry: the lane's armed event came, nothing is asked of the lane, and its next
+// event steps in the same segment (a plain run's, or a ramp segment's next step) or in the plain
+// run after it, far enough ahead to arm and near enough for the compare to reach. Its STEP is the same, so only the
+// pulse's end and the compare move (Port::rearm). Decided before anything changes: false leaves
+// the entry to run_lane_general, untouched.
 template <class Port>
-HMC_STEP_INLINE void run_step_interrupt(StepEngine& engine, Port& port) {
+HMC_STEP_INLINE bool run_lane_express(StepEngine& engine, Port& port) {
   using namespace step_engine_detail;
-  StepEngine& e = *based(&engine);
-  uint8_t due;
-  uint8_t steps;
-  uint32_t now;
-  const bool fired = port.event_fired(e) && load8(e.pending) == 0;
-  if (HMC_STEP_LIKELY(fired)) {
-    steps = e.next_steps;
-    now = e.next_when;
-    if (steps != 0) port.fired(steps, now);  // first: on the host this raises STEP
-    port.ack_event();
-    due = e.next_due;
+  StepLane& lane = *based(&engine.lanes[Port::kLane]);
+  // flags, compare, pending and halt_request in one load: a plain run's or a ramp segment's
+  // event armed, nothing asked.
+  uint32_t state;
+  __builtin_memcpy(&state, __builtin_assume_aligned(&lane, 4), sizeof state);
+  const uint32_t at = lane.next;
+  uint32_t when;
+  uint32_t sum = 0;
+  // The segment after this one's last event, of the same kind: a plain run (taken as advance()
+  // takes it) or a ramp segment (taken as load_segment would: the steps folded, then begun).
+  const StepSegment* run = nullptr;
+  if (HMC_STEP_LIKELY(state == kExpressPlain)) {
+    if (HMC_STEP_LIKELY(lane.left > 1)) {
+      when = at + lane.interval;
+    } else {
+      const uint8_t head = lane.head;
+      if (head == load8(lane.tail)) return false;
+      fence();
+      run = &lane.ring[head & (kRingSize - 1)];
+      if (run->flags != 0 || lane.count + run->count < run->count) return false;
+      when = at + run->interval;
+    }
+  } else if (state == kExpressRamp) {
+    if (HMC_STEP_LIKELY(lane.ramp_left != 0)) {
+      sum = lane.fraction + lane.interval;  // ramp_step's, not yet stored
+    } else {
+      const uint8_t head = lane.head;
+      if (head == load8(lane.tail)) return false;
+      fence();
+      run = &lane.ring[head & (kRingSize - 1)];
+      if (run->flags != kSegRamp) return false;
+      sum = static_cast<uint16_t>(run->position_step) + run->interval;  // begin_ramp's
+    }
+    when = at + (sum >> 16);
   } else {
+    return false;
+  }
+  if (HMC_STEP_UNLIKELY(((when - at) >> kExpressBits) != 0) ||
+      HMC_STEP_UNLIKELY(!port.event_fired(engine))) {
+    return false;
+  }
+  const int32_t ahead = port.ticks_until(when, at, 0);
+  if (HMC_STEP_UNLIKELY(ahead < static_cast<int32_t>(Port::kCostTicks))) return false;
+  // The event just made is past, so the next is less than kExpressTicks away: only a compare
+  // that reaches less than twice that (TCC2's) may need a relay.
+  if (Port::kReachTicks < 2 * kExpressTicks && HMC_STEP_UNLIKELY(beyond_reach<Port>(ahead))) {
+    return false;
+  }
+  port.fired(at);  // first: on the host this raises STEP
+  const uint32_t mark = port.stopwatch();
+  port.ack_event();
+  lane.next = when;
+  port.rearm(when);
+  if (HMC_STEP_LIKELY(run == nullptr)) {
+    if (HMC_STEP_LIKELY(state == kExpressPlain)) {
+      --lane.left;
+    } else {
+      --lane.ramp_left;
+      lane.fraction = sum & 0xFFFFu;
+      lane.interval += static_cast<uint32_t>(lane.add);
+    }
+  } else {
+    if (state == kExpressPlain) {
+      lane.interval = run->interval;
+      lane.count += run->count;
+      lane.left = run->count;
+    } else {
+      lane.left = 0;  // the segment played out, as advance() leaves it for load_segment
+      fold_steps(lane, at);
+      lane.count = run->count;
+      begin_ramp(lane, *run, at);
+    }
+    fence();
+    store8(lane.head, static_cast<uint8_t>(lane.head + 1));
+  }
+  port.step_low(mark);
+  return true;
+}
+
+// Lane Port::kLane's interrupt (see the top of this file) in full: its compare's event, a relay,
+// or the main loop's request.
+template <class Port>
+HMC_STEP_INLINE void run_lane_general(StepEngine& engine, Port& port) {
+  using namespace step_engine_detail;
+  constexpr uint8_t i = Port::kLane;
+  constexpr uint8_t bit = uint8_t(1u << i);
+  StepEngine& e = *based(&engine);
+  StepLane& lane = e.lanes[i];
+  const uint8_t compare = lane.compare;
+  const bool fired = port.event_fired(e);
+  uint32_t now;
+  bool raised = false;  // STEP raised by this entry (the host's, or the CPU's), not yet lowered
+  bool waited;
+  if (HMC_STEP_LIKELY(fired && compare != kCompareIdle && load8(lane.pending) == 0)) {
+    if (HMC_STEP_LIKELY(compare == kCompareEvent)) {
+      now = e.lanes[i].next;
+      if ((e.stepping & bit) != 0) {
+        port.fired(now);  // first: on the host this raises STEP
+        raised = !Port::kArmedStepsByHardware;
+      }
+      port.ack_event();
+      step_lane(e, port, i);
+    } else {
+      port.ack_event();
+      now = lane.relay_at;
+    }
+    waited = false;
+  } else {
+    if (load8(lane.pending) == 0) {
+      // Neither its compare's event nor a request: another lane's kick, or a parked compare
+      // come round with its counter.
+      if (fired) port.ack_event();
+      return;
+    }
     port.disarm();
-    steps = 0;
-    if (Port::kArmedStepsByHardware && e.next_armed != 0) {
-      // The armed compare is moved to now (past once live: no match until the counter wraps),
-      // so nothing the hardware does at it can touch a pulse this entry makes. The armed event
-      // may have come before, its STEP raised by the hardware: it is taken as made (its pulse's
-      // end set from now), before a halt could drop it uncounted.
+    if (Port::kArmedStepsByHardware) {
+      // The compare is moved to now (past once live, and a whole counter's wrap from matching
+      // again: a parked compare comes round every 2^16 ticks on a 16-bit timer), so nothing the
+      // hardware does at it can touch a pulse this entry makes. Its event may have come before,
+      // STEP raised by the hardware: it is taken as made (its pulse's end set from now), before
+      // a halt could drop it uncounted.
       now = port.take_entry();
       port.park(now);
-      if (static_cast<int32_t>(e.next_when - now) <= 0) {
-        steps = e.next_steps;
-        if (steps != 0) port.step_high(steps, now);
-        step_lanes(e, port, e.next_due);
+      if (compare == kCompareEvent && static_cast<int32_t>(e.lanes[i].next - now) <= 0) {
+        if ((e.stepping & bit) != 0) port.step_high(now);
+        step_lane(e, port, i);
       }
     }
-    if (load8(e.pending) != 0) {
-      store8(e.pending, 0);
-      take_requests(e);
-    }
-    // The clock after the requests: the waits and the compare count from here (read before
-    // them, the time they took went uncounted and a compare could be written for a time
-    // already past, to be found only by the main loop's overdue check 1 ms later).
+    lane.compare = kCompareIdle;
+    store8(lane.pending, 0);
+    take_lane_requests(e, i);
+    // The clock after the requests: the waits and the compare count from here.
     now = port.take_entry();
-    due = 0;
-#pragma GCC unroll 3
-    for (uint8_t i = 0; i < 3; ++i) {
-      if ((e.armed & (1u << i)) != 0 && static_cast<int32_t>(e.next[i] - now) <= 0) {
-        due |= uint8_t(1u << i);
-      }
-    }
-    const uint8_t more = due & e.stepping;
-    if (more != 0) port.step_high(more, now);
-    steps = uint8_t(steps | more);
-    e.next_armed = 0;
+    waited = true;
   }
-  // next_armed: each pass that leaves sets it (armed, or not); a fast entry's stale 1 is not read
-  // before then.
-  // The entry's mark: waits and the time spent count from here (the event's time plus the
-  // entry's latency), so an event waited for inside comes as late after its time as one that
-  // enters the interrupt.
+  // The entry's mark: waits and the time spent count from here.
   const uint32_t entry_mark = port.stopwatch();
   const uint32_t entry = now;
-  // The fast entry's first pass is peeled off the loop: with `now`, the mark and "not waited"
-  // known constants there, its values stay in registers (in the loop -Os kept them on the stack).
-  if (HMC_STEP_LIKELY(fired) && HMC_STEP_LIKELY(step_pass(e, port, due, steps, entry, entry,
-                                                           entry_mark, entry_mark, false))) {
-    return;
-  }
-  bool waited = !fired;  // a slow entry may wait for the event its compare is armed for
   uint32_t mark = entry_mark;
-  if (fired) {
-    next_waited_event(e, port, entry, entry_mark, now, due, steps, mark);
+  while (HMC_STEP_UNLIKELY(!arm_lane(e, lane, port, i, entry, entry_mark, waited))) {
+    // Due before the interrupt could return and come back: waited for, raised by the CPU.
+    if (raised) port.step_low(mark);
+    const uint32_t when = e.lanes[i].next;
+    port.wait_until(when, entry, entry_mark);
+    raised = (e.stepping & bit) != 0;
+    if (raised) port.step_high(when);
+    mark = port.stopwatch();
+    step_lane(e, port, i);
     waited = true;
   }
-  while (!step_pass(e, port, due, steps, now, entry, entry_mark, mark, waited)) {
-    next_waited_event(e, port, entry, entry_mark, now, due, steps, mark);
-    waited = true;
-  }
+  if (raised) port.step_low(mark);
+}
+
+// The interrupt: the express entry, or the full one.
+template <class Port>
+HMC_STEP_INLINE void run_lane_interrupt(StepEngine& engine, Port& port) {
+  if (!run_lane_express(engine, port)) run_lane_general(engine, port);
 }
 
 }  // namespace hmc::fw

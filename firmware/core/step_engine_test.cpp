@@ -17,16 +17,24 @@ namespace {
 using hmc::fw::StepEngine;
 using hmc::fw::StepSegment;
 
+// Lane i's steps since power-up (derived from its counters, as the main loop reads them).
+uint32_t total(const StepEngine& e, uint8_t i) {
+  return hmc::fw::step_engine_detail::lane_steps(e.lanes[i], e.lanes[i].next).total;
+}
+
 // A clock in ticks: each port call costs kCallTicks, waits move it to their end.
 // As on the SAMD21, the armed compare raises STEP by itself (at its time) and the interrupt only
 // sets the pulse's end.
-struct ClockPort {
+template <uint32_t Reach>
+struct ClockPortOf {
+  static constexpr uint8_t kLane = 0;
+  static constexpr uint32_t kReachTicks = Reach;
   static constexpr uint32_t kCostTicks = 192;
   static constexpr bool kArmedStepsByHardware = true;
   static constexpr uint32_t kCallTicks = 40;
   uint32_t clock = 0;
   uint32_t armed = 0;
-  uint8_t armed_steps = 0;
+  bool armed_steps = false;
   bool entered_by_compare = false;  // entered by the compare arm() set
   std::vector<uint32_t> rises;  // the time of each STEP rise
   // One letter a port call: F the armed STEP's end, H high, A ack, D disarm, E entry, W wait,
@@ -35,14 +43,14 @@ struct ClockPort {
 
   bool event_fired(const StepEngine&) const { return entered_by_compare; }
   void ack_event() { calls += 'A'; }
-  void fired(uint8_t, uint32_t when) {
+  void fired(uint32_t when) {
     calls += 'F';
     rises.push_back(when);  // the hardware raised it at the compare
     clock += kCallTicks;
   }
   void disarm() {
     calls += 'D';
-    armed_steps = 0;
+    armed_steps = false;
   }
   void park(uint32_t now) {
     calls += 'P';
@@ -52,14 +60,14 @@ struct ClockPort {
     calls += 'E';
     return clock;
   }
-  void step_high(uint8_t, uint32_t) {
+  void step_high(uint32_t) {
     calls += 'H';
     clock += kCallTicks;
     rises.push_back(clock);
   }
   uint32_t stopwatch() { return clock; }
   uint32_t elapsed(uint32_t mark) { return clock - mark; }
-  void step_low(uint8_t, uint32_t mark) {
+  void step_low(uint32_t mark) {
     if (clock - mark < hmc::fw::kStepHighTicks) clock = mark + hmc::fw::kStepHighTicks;
   }
   void set_dir(uint8_t, bool) { clock += kCallTicks; }
@@ -70,12 +78,14 @@ struct ClockPort {
     calls += 'W';
     if (ticks_until(when, 0, 0) > 0) clock = when;
   }
-  void arm(uint32_t when, uint8_t steps) {
+  void rearm(uint32_t when) { arm(when, armed_steps); }
+  void arm(uint32_t when, bool steps) {
     calls += 'M';
     armed = when;
     armed_steps = steps;
   }
 };
+using ClockPort = ClockPortOf<hmc::fw::kMaxSegmentTicks>;
 
 }  // namespace
 
@@ -88,7 +98,7 @@ TEST_CASE("step interrupt: events waited for inside one entry come at their time
   lane.ring[1] = StepSegment{150, 5, 0, 0, 0, 0};
   lane.ring[2] = StepSegment{960, 4, 0, 0, 0, 0};
   lane.tail = 3;
-  e.pending = 1;
+  lane.pending = 1;
   const std::vector<uint32_t> due = {10000, 10150, 10300, 10450, 10600, 10750,
                                      11710, 12670, 13630, 14590};
 
@@ -98,7 +108,7 @@ TEST_CASE("step interrupt: events waited for inside one entry come at their time
     port.clock = now;
     port.entered_by_compare = entries > 0;  // the first entry is the main loop's kick (e.pending)
     port.armed = 0;
-    hmc::fw::run_step_interrupt(e, port);
+    hmc::fw::run_lane_interrupt(e, port);
     if (port.armed == 0) break;
     now = port.armed;
   }
@@ -108,7 +118,7 @@ TEST_CASE("step interrupt: events waited for inside one entry come at their time
     CHECK(port.rises[i] >= due[i]);
     CHECK(port.rises[i] <= due[i] + 2 * ClockPort::kCallTicks);
   }
-  CHECK(lane.total == due.size());
+  CHECK(total(e, 0) == due.size());
 }
 
 TEST_CASE("step interrupt: an entry by its compare sets the pulse's end before anything else") {
@@ -121,7 +131,7 @@ TEST_CASE("step interrupt: an entry by its compare sets the pulse's end before a
   lane.ring[2] = StepSegment{150, 2, 0, 0, 0, 0};
   lane.ring[3] = StepSegment{960, 2, 0, 0, 0, 0};
   lane.tail = 4;
-  e.pending = 1;
+  lane.pending = 1;
 
   ClockPort port;
   uint32_t now = 10000;
@@ -131,14 +141,15 @@ TEST_CASE("step interrupt: an entry by its compare sets the pulse's end before a
     port.entered_by_compare = n > 0;
     port.armed = 0;
     port.calls.clear();
-    hmc::fw::run_step_interrupt(e, port);
+    hmc::fw::run_lane_interrupt(e, port);
     entries.push_back(port.calls);
     if (port.armed == 0) break;
     now = port.armed;
   }
   REQUIRE(entries.size() >= 5);
-  // The kick: the compare's STEP disarmed, the clock, then STEP by the CPU.
-  CHECK(entries[0].rfind("DEH", 0) == 0);
+  // The kick: the compare's STEP disarmed, the clock, the compare parked, then STEP by the CPU
+  // (due: no wait).
+  CHECK(entries[0].rfind("DEPEWH", 0) == 0);
   for (size_t n = 1; n < entries.size(); ++n) {
     INFO("entry " << n << ": " << entries[n]);
     if (n + 1 < entries.size()) CHECK(entries[n].rfind("FA", 0) == 0);  // the end, then the flag
@@ -150,7 +161,7 @@ TEST_CASE("step interrupt: an entry by its compare sets the pulse's end before a
     if (wait != std::string::npos) waited_and_cleared = calls.find("MA", wait) != std::string::npos;
   }
   CHECK(waited_and_cleared);
-  CHECK(lane.total == 8);
+  CHECK(total(e, 0) == 8);
 }
 
 namespace {
@@ -164,7 +175,7 @@ std::vector<uint32_t> play(StepEngine& e, ClockPort& port, uint32_t start, int e
     port.clock = now;
     port.entered_by_compare = n > 0;
     port.armed = 0;
-    hmc::fw::run_step_interrupt(e, port);
+    hmc::fw::run_lane_interrupt(e, port);
     if (port.armed == 0) break;
     armed.push_back(port.armed);
     now = port.armed;
@@ -205,7 +216,7 @@ TEST_CASE("step interrupt: ramp segments step on the accumulator's whole ticks, 
                              static_cast<int32_t>(s)};
   lane.ring[3] = StepSegment{960, 3, 0, 0, 0, 0};
   lane.tail = 4;
-  e.pending = 1;
+  lane.pending = 1;
   ClockPort port;
   const std::vector<uint32_t> armed = play(e, port, 10000, 20);
   REQUIRE(armed.size() >= due.size());
@@ -213,7 +224,7 @@ TEST_CASE("step interrupt: ramp segments step on the accumulator's whole ticks, 
     INFO("step " << i);
     CHECK(armed[i] == due[i]);  // the start's event (no step) at 10 000 armed nothing
   }
-  CHECK(lane.total == due.size());
+  CHECK(total(e, 0) == due.size());
   CHECK(lane.ramp_left == 0);
 }
 
@@ -223,31 +234,105 @@ TEST_CASE("step interrupt: a halt inside a ramp segment leaves nothing of it") {
   lane.ring[0] = StepSegment{10000, 1, 16, hmc::fw::kSegStart | hmc::fw::kSegNoStep, 0, 0};
   lane.ring[1] = StepSegment{1000u << 16, 64, 0, hmc::fw::kSegRamp, 0, -(1 << 12)};
   lane.tail = 2;
-  e.pending = 1;
+  lane.pending = 1;
   ClockPort port;
   play(e, port, 10000, 4);  // the start and three steps of the segment
-  const uint32_t steps = lane.total;
+  const uint32_t steps = total(e, 0);
   REQUIRE(steps == 3);
   REQUIRE(lane.ramp_left == 60);
   // The main loop halts (as StepScheduler::post_halt does), then starts a plain move.
   lane.halt_upto = lane.tail;
   lane.halt_request = 0x80 | 3;
-  e.pending = 1;
+  lane.pending = 1;
   port.clock += 10;
   port.entered_by_compare = false;
-  hmc::fw::run_step_interrupt(e, port);
+  hmc::fw::run_lane_interrupt(e, port);
   CHECK(port.rises.size() == steps);
   CHECK(lane.ramp_left == 0);
   CHECK(lane.moving == 0);
   lane.ring[2] = StepSegment{50000, 1, 16, hmc::fw::kSegStart | hmc::fw::kSegNoStep, 0, 0};
   lane.ring[3] = StepSegment{700, 2, 0, 0, 0, 0};
   lane.tail = 4;
-  e.pending = 1;
+  lane.pending = 1;
   const std::vector<uint32_t> armed = play(e, port, 50000, 6);
   REQUIRE(armed.size() >= 2);
   CHECK(armed[0] == 50700);
   CHECK(armed[1] == 51400);
-  CHECK(lane.total == steps + 2);
+  CHECK(total(e, 0) == steps + 2);
+}
+
+TEST_CASE("step interrupt: derived counts equal per-step counters mid-segment, at boundaries, "
+          "after a halt") {
+  // Motor 1 from a start without a step at 10 000: 3 steps 960 apart, a wait, a DIR event,
+  // 2 steps 800 apart, a ramp segment of 8 (from 1 000.5 ticks, −1/16 tick a step), 5 steps 700
+  // apart; after each entry the lane's derived counts are compared with what counters updated
+  // at every step would hold (the steps, the last step's time, the time since the step before,
+  // the first one's since the start's anchor). A halt after two of the last run's steps.
+  using hmc::fw::kSegDir;
+  using hmc::fw::kSegNoStep;
+  using hmc::fw::kSegRamp;
+  using hmc::fw::kSegStart;
+  constexpr uint32_t kAnchor = 10000;
+  std::vector<uint32_t> times;  // every step's planned time
+  uint32_t t = kAnchor;
+  for (int j = 0; j < 3; ++j) times.push_back(t += 960);
+  t += 500 + 300;  // the wait and the DIR event
+  for (int j = 0; j < 2; ++j) times.push_back(t += 800);
+  constexpr uint32_t kD0 = (1000u << 16) + (1u << 15);
+  constexpr int32_t kAdd = -(1 << 12);
+  uint32_t acc = 0;  // the accumulator's fraction, Q0.16
+  for (int j = 0; j < 8; ++j) {
+    acc += kD0 + static_cast<uint32_t>(j * kAdd);
+    times.push_back(t += acc >> 16);
+    acc &= 0xFFFFu;
+  }
+  for (int j = 0; j < 5; ++j) times.push_back(t += 700);
+
+  StepEngine e{};
+  hmc::fw::StepLane& lane = e.lanes[0];
+  lane.ring[0] = StepSegment{kAnchor, 1, 16, kSegStart | kSegNoStep, 0, 0};
+  lane.ring[1] = StepSegment{960, 3, 0, 0, 0, 0};
+  lane.ring[2] = StepSegment{500, 1, 0, kSegNoStep, 0, 0};
+  lane.ring[3] = StepSegment{300, 1, 0, kSegDir, 0, 0};
+  lane.ring[4] = StepSegment{800, 2, 0, 0, 0, 0};
+  lane.ring[5] = StepSegment{kD0, 8, 0, kSegRamp, 0, kAdd};
+  lane.ring[6] = StepSegment{700, 5, 0, 0, 0, 0};
+  lane.tail = 7;
+  lane.pending = 1;
+
+  auto check = [&](size_t steps, bool halted) {
+    const hmc::fw::step_engine_detail::LaneSteps s =
+        hmc::fw::step_engine_detail::lane_steps(lane, e.lanes[0].next);
+    INFO("after " << steps << " steps");
+    REQUIRE(s.total == steps);
+    if (steps == 0) return;
+    CHECK(s.last_step == times[steps - 1]);
+    const uint32_t before = steps >= 2 ? times[steps - 2] : kAnchor;
+    CHECK(s.last_interval == (halted ? 0 : times[steps - 1] - before));
+  };
+  ClockPort port;
+  uint32_t now = kAnchor;
+  for (int n = 0; port.rises.size() < times.size() - 3; ++n) {
+    REQUIRE(n < 40);
+    port.clock = now;
+    port.entered_by_compare = n > 0;
+    port.armed = 0;
+    hmc::fw::run_lane_interrupt(e, port);
+    check(port.rises.size(), false);
+    REQUIRE(port.armed != 0);
+    now = port.armed;
+  }
+  CHECK(lane.head == 7);  // every segment taken, the last one playing
+  // Halted before the third step of the last run (as StepScheduler::post_halt asks).
+  lane.halt_upto = lane.tail;
+  lane.halt_request = 0x80 | 3;
+  lane.pending = 1;
+  port.clock = now - 100;
+  port.entered_by_compare = false;
+  hmc::fw::run_lane_interrupt(e, port);
+  CHECK(port.rises.size() == times.size() - 3);
+  check(port.rises.size(), true);
+  CHECK(lane.moving == 0);
 }
 
 TEST_CASE("step interrupt: a kick after the armed compare counts the step the hardware made") {
@@ -259,25 +344,25 @@ TEST_CASE("step interrupt: a kick after the armed compare counts the step the ha
     StepEngine e{};
     hmc::fw::StepLane& lane = e.lanes[0];
     lane.ring[0] = StepSegment{10000, 1, 16, hmc::fw::kSegStart, 0, 0};
-    lane.ring[1] = StepSegment{960, hmc::fw::kEndlessEvents, 0, 0, 0, 0};
+    lane.ring[1] = StepSegment{960, 1000000, 0, 0, 0, 0};
     lane.tail = 2;
-    e.pending = 1;
+    lane.pending = 1;
     ClockPort port;
     port.clock = 10000;
-    hmc::fw::run_step_interrupt(e, port);
+    hmc::fw::run_lane_interrupt(e, port);
     REQUIRE(port.armed == 10960);
-    REQUIRE(port.armed_steps == 1);
+    REQUIRE(port.armed_steps);
     REQUIRE(lane.total == 1);
 
     lane.halt_upto = lane.tail;
     lane.halt_request = 0x80 | 1;
-    e.pending = 1;
+    lane.pending = 1;
     port.clock = kick_at;
     port.calls.clear();
-    hmc::fw::run_step_interrupt(e, port);
+    hmc::fw::run_lane_interrupt(e, port);
     INFO("kick at " << kick_at << ": " << port.calls);
     CHECK(port.calls.rfind("DEP", 0) == 0);  // disarmed first, the clock, the compare parked
-    CHECK(port.armed_steps == 0);           // nothing armed after the halt
+    CHECK(!port.armed_steps);               // nothing armed after the halt
     CHECK(port.armed == kick_at);           // the compare parked at the kick's clock
     CHECK(lane.moving == 0);
     if (kick_at >= 10960) {
@@ -288,4 +373,41 @@ TEST_CASE("step interrupt: a kick after the armed compare counts the step the ha
       CHECK(port.calls.find('H') == std::string::npos);
     }
   }
+}
+
+TEST_CASE("step interrupt: an event beyond the compare's reach is reached through relays") {
+  // A compare that reaches 4 096 ticks (as TCC2's 16-bit counter reaches 2^15): steps 10 000
+  // ticks apart arm relays on the way, each stepping nothing, and every step comes at its time.
+  using Port = ClockPortOf<4096>;
+  StepEngine e{};
+  hmc::fw::StepLane& lane = e.lanes[0];
+  lane.ring[0] = StepSegment{10000, 1, 16, hmc::fw::kSegStart, 0, 0};
+  lane.ring[1] = StepSegment{10000, 3, 0, 0, 0, 0};
+  lane.tail = 2;
+  lane.pending = 1;
+  Port port;
+  uint32_t now = 10000;
+  std::vector<uint32_t> armed;
+  for (int n = 0; n < 40; ++n) {
+    port.clock = now;
+    port.entered_by_compare = n > 0;
+    port.armed = 0;
+    hmc::fw::run_lane_interrupt(e, port);
+    if (port.armed == 0 || lane.compare == hmc::fw::kCompareIdle) break;
+    // Each compare within the reach of the clock at the arm.
+    CHECK(port.armed - port.clock <= Port::kReachTicks);
+    CHECK(port.armed_steps == (lane.compare == hmc::fw::kCompareEvent));
+    armed.push_back(port.armed);
+    now = port.armed;
+  }
+  const std::vector<uint32_t> due = {10000, 20000, 30000, 40000};
+  REQUIRE(port.rises.size() == due.size());
+  for (size_t i = 0; i < due.size(); ++i) {
+    INFO("step " << i);
+    CHECK(port.rises[i] >= due[i]);
+    CHECK(port.rises[i] <= due[i] + 2 * Port::kCallTicks);
+  }
+  // Two relays between steps 10 000 apart (a relay at most 4 096 ahead), then the step.
+  CHECK(armed.size() == 3 * (2 + 1));
+  CHECK(total(e, 0) == due.size());
 }

@@ -11,6 +11,7 @@ namespace {
 
 using hal::Ticks;
 using step_engine_detail::fence;
+using step_engine_detail::LaneSteps;
 using step_engine_detail::load8;
 using step_engine_detail::store8;
 
@@ -37,22 +38,42 @@ T load(const T& x) {
   return *static_cast<const volatile T*>(&x);
 }
 
-// A lane's position and its move's steps (StepLane): the interrupt counts only `total` a step;
-// a fold between the reads (counted in `folds`) has them read again.
+// `read(lane, next)` over a consistent state of lane `index` (StepLane): an interrupt between
+// the reads either moves the lane's next event or counts a fold, and has them read again.
+template <class Read>
+auto read_lane(const StepEngine& engine, uint8_t index, Read read) {
+  const StepLane& lane = engine.lanes[index];
+  for (;;) {
+    const uint32_t folds = load(lane.folds);
+    const uint32_t next = load(engine.lanes[index].next);
+    fence();
+    const auto out = read(lane, next);
+    fence();
+    if (load(lane.folds) == folds && load(engine.lanes[index].next) == next) return out;
+  }
+}
+
+// A lane's steps since power-up (what a per-step counter would hold).
+uint32_t total_steps(const StepEngine& engine, uint8_t index) {
+  return read_lane(engine, index, [](const StepLane& lane, uint32_t) {
+    return lane.total + step_engine_detail::steps_since_fold(lane);
+  });
+}
+
+// A lane's position, its move's steps and what per-step counters would hold (lane_steps).
 struct LaneCounts {
   int32_t position;  // 1/256 step
   uint32_t fired;
+  LaneSteps steps;
 };
-LaneCounts counts(const StepLane& lane) {
-  for (;;) {
-    const uint32_t folds = load(lane.folds);
-    const uint32_t total = load(lane.total);
-    const uint32_t moved = (total - load(lane.total_at)) *
-                           static_cast<uint32_t>(static_cast<int32_t>(load(lane.position_step)));
-    const uint32_t at = static_cast<uint32_t>(load(lane.position_at));
-    const LaneCounts out{static_cast<int32_t>(at + moved), total - load(lane.fired_from)};
-    if (load(lane.folds) == folds) return out;
-  }
+LaneCounts counts(const StepEngine& engine, uint8_t index) {
+  return read_lane(engine, index, [](const StepLane& lane, uint32_t next) {
+    const LaneSteps steps = step_engine_detail::lane_steps(lane, next);
+    const uint32_t moved = (steps.total - lane.total_at) *
+                           static_cast<uint32_t>(static_cast<int32_t>(lane.position_step));
+    const uint32_t at = static_cast<uint32_t>(lane.position_at);
+    return LaneCounts{static_cast<int32_t>(at + moved), steps.total - lane.fired_from, steps};
+  });
 }
 
 Ticks later(Ticks a, Ticks b) { return a > b ? a : b; }
@@ -112,7 +133,7 @@ StepStatus StepScheduler::plan_and_post(uint8_t motor, const MoveSpec* move) {
     if (move == nullptr) return StepStatus::kOk;
     status = plan_move(*move, 0, first);
     if (status == PlanStatus::kOk) {
-      begin_from_rest(index, free[0], now);
+      begin_from_rest(index, free[0], soonest_start(first));
       produce(index);
     }
     return from_plan(status);
@@ -130,15 +151,16 @@ StepStatus StepScheduler::plan_and_post(uint8_t motor, const MoveSpec* move) {
     mo.then_slot = kNoSlot;
     mo.dir_known = false;  // the halt may drop a DIR change not yet made
     // The halt is taken before any event after `now`: the steps so far are all there will be.
-    const StepLane& lane = engine_.lanes[index];
-    mo.pushed_position = counts(lane).position;
-    mo.pushed = load(lane.total);
+    const LaneCounts counted = counts(engine_, index);
+    mo.pushed_position = counted.position;
+    mo.pushed = counted.steps.total;
     // (A start's anchor counts as its last step, and may still be ahead of `now`.)
-    const int32_t since_step = static_cast<int32_t>(static_cast<uint32_t>(now) - load(lane.last_step));
+    const int32_t since_step =
+        static_cast<int32_t>(static_cast<uint32_t>(now) - counted.steps.last_step);
     const int64_t last_rise = static_cast<int64_t>(now) - since_step;
     mo.last_rise = last_rise > 0 ? static_cast<Ticks>(last_rise) : 0;
     if (move != nullptr) {
-      begin_from_rest(index, free[0], now);
+      begin_from_rest(index, free[0], soonest_start(first));
       produce(index);
     }
     kick();
@@ -152,9 +174,9 @@ StepStatus StepScheduler::plan_and_post(uint8_t motor, const MoveSpec* move) {
 
   // The handover step h: the step after the next one (the next one's time is fixed), plus the
   // steps the lead covers at the current interval; the ring never holds more than that.
-  const StepLane& lane = engine_.lanes[index];
-  const int32_t into = static_cast<int32_t>(load(lane.total) - mo.profile_base);
-  const uint32_t last_interval = load(lane.last_interval);
+  const LaneSteps counted = counts(engine_, index).steps;
+  const int32_t into = static_cast<int32_t>(counted.total - mo.profile_base);
+  const uint32_t last_interval = counted.last_interval;
   const uint32_t spacing = last_interval > kMinIntervalTicks ? last_interval : kMinIntervalTicks;
   uint32_t h = static_cast<uint32_t>(into > 0 ? into : 0) + 2 + lead_ / spacing;
   if (h < mo.planned) h = mo.planned;
@@ -206,8 +228,9 @@ void StepScheduler::sync(uint8_t index) {
   mo.next_slot = kNoSlot;
   mo.next_then = kNoSlot;
   mo.move_mark = false;
-  mo.pushed_position = counts(lane).position;
-  mo.pushed = load(lane.total);
+  const LaneCounts counted = counts(engine_, index);
+  mo.pushed_position = counted.position;
+  mo.pushed = counted.steps.total;
 }
 
 // Also the guard of a compare written too late to match (the interrupt delayed past its own
@@ -224,7 +247,7 @@ void StepScheduler::fill() {
     // A plan whose ring still reaches past its refill point, with no halt since the last look,
     // has nothing for sync() and produce() to do (they would find that out in ≈ 100 cycles).
     const bool well_ahead = mo.active != kNoSlot && load(lane.halts) == mo.seen_halts &&
-                            static_cast<int32_t>(load(lane.total) - mo.refill_total) < 0;
+                            static_cast<int32_t>(total_steps(engine_, index) - mo.refill_total) < 0;
     if (!well_ahead) {
       sync(index);
       produce(index);
@@ -237,7 +260,9 @@ void StepScheduler::fill() {
       now = static_cast<uint32_t>(timer_.now());
       have_now = true;
     }
-    if (static_cast<int32_t>(now - load(engine_.next[index])) > static_cast<int32_t>(kOverdueTicks)) kick();
+    if (static_cast<int32_t>(now - load(engine_.lanes[index].next)) > static_cast<int32_t>(kOverdueTicks)) {
+      wake(index);
+    }
   }
 }
 
@@ -271,10 +296,9 @@ uint32_t StepScheduler::steps_ahead_allowed(Motor& mo) const {
 void StepScheduler::produce(uint8_t index) {
   Motor& mo = motors_[index];
   if (mo.active == kNoSlot) return;  // no plan: nothing to produce (and no division)
-  const StepLane& lane = engine_.lanes[index];
   bool pushed = false;
   const uint32_t allowed = steps_ahead_allowed(mo);
-  uint32_t ahead = mo.pushed - load(lane.total);
+  uint32_t ahead = mo.pushed - total_steps(engine_, index);
   // (allowed ≥ 2: more than allowed / 2 ahead is at least 1.)
   mo.refill_total = mo.pushed - allowed / 2;
   if (ahead > allowed / 2) return;
@@ -341,13 +365,24 @@ void StepScheduler::produce(uint8_t index) {
   if (pushed && (load8(engine_.armed) & (1u << index)) == 0) wake(index);
 }
 
-// The first event of a move from rest: DIR when it changes, or a wait, at the anchor.
-void StepScheduler::begin_from_rest(uint8_t index, uint8_t slot, Ticks now) {
+// The soonest anchor for `profile` from rest, after its planning: its first step kPickupTicks or
+// more after the clock (the first step's delay: the interval at constant rate; √(2/a) s from
+// rest at acceleration a, enough up to kPickupAccel).
+Ticks StepScheduler::soonest_start(const Profile& profile) const {
+  const uint32_t first = profile.k == 0                        ? profile.spec.interval
+                         : profile.spec.accel <= kPickupAccel ? kPickupTicks
+                                                              : 0;
+  return timer_.now() + (first < kPickupTicks ? kPickupTicks - first : 0);
+}
+
+// The first event of a move from rest: DIR when it changes, or a wait, at the anchor (`soonest`,
+// or later if the last pulse needs it).
+void StepScheduler::begin_from_rest(uint8_t index, uint8_t slot, Ticks soonest) {
   Motor& mo = motors_[index];
   const Profile& profile = mo.slots[slot];
   const bool reverse = profile.spec.reverse;
   const Ticks anchor =
-      mo.started ? later(now, mo.last_rise + kStepHighTicks + kDirGuardTicks) : now;
+      mo.started ? later(soonest, mo.last_rise + kStepHighTicks + kDirGuardTicks) : soonest;
   mo.started = true;
   uint8_t flags = kSegStart | kSegNoStep;
   if (!mo.dir_known || reverse != mo.dir_reverse) {
@@ -594,14 +629,14 @@ uint32_t StepScheduler::push_ramp_segment(uint8_t index, uint32_t most) {
   return n;
 }
 
-// Has the interrupt take the motor's ring up (it waits, not armed).
+// Has the motor's interrupt take its requests now: its ring (it waits, not armed), or an
+// overdue event.
 void StepScheduler::wake(uint8_t index) {
-  (void)index;
-  store8(engine_.pending, 1);
+  store8(engine_.lanes[index].pending, 1);
   kick();
 }
 
-// Has the interrupt run now: it takes requests before any due event.
+// Has the lanes' interrupts run now: each with a request takes it before any due event.
 void StepScheduler::kick() { timer_.schedule(timer_.now()); }
 
 // Asks the interrupt to drop the motor's ring as far as the main loop has filled it, and stop.
@@ -610,7 +645,7 @@ void StepScheduler::post_halt(uint8_t index, uint8_t end) {
   store8(lane.halt_upto, load8(lane.tail));
   fence();
   store8(lane.halt_request, static_cast<uint8_t>(0x80u | end));
-  store8(engine_.pending, 1);
+  store8(lane.pending, 1);
 }
 
 void StepScheduler::halt(uint8_t motor) {
@@ -630,7 +665,7 @@ bool StepScheduler::set_position(uint8_t motor, int32_t position) {
   if (!is_motor(motor) || is_running(motor)) return false;
   StepLane& lane = engine_.lanes[motor - 1];
   // At rest the interrupt neither steps nor folds this lane.
-  *static_cast<volatile uint32_t*>(&lane.total_at) = load(lane.total);
+  *static_cast<volatile uint32_t*>(&lane.total_at) = total_steps(engine_, motor - 1);
   *static_cast<volatile int32_t*>(&lane.position_at) = position;
   motors_[motor - 1].pushed_position = position;
   return true;
@@ -645,19 +680,18 @@ bool StepScheduler::is_running(uint8_t motor) const {
 }
 
 int32_t StepScheduler::position(uint8_t motor) const {
-  return is_motor(motor) ? counts(engine_.lanes[motor - 1]).position : 0;
+  return is_motor(motor) ? counts(engine_, motor - 1).position : 0;
 }
 
 uint32_t StepScheduler::steps_done(uint8_t motor) const {
-  return is_motor(motor) ? counts(engine_.lanes[motor - 1]).fired : 0;
+  return is_motor(motor) ? counts(engine_, motor - 1).fired : 0;
 }
 
 bool StepScheduler::target(uint8_t motor, int32_t& out) const {
   if (!is_motor(motor)) return false;
   const Motor& mo = motors_[motor - 1];
-  const StepLane& lane = engine_.lanes[motor - 1];
   if (!is_running(motor)) {
-    out = counts(lane).position;
+    out = counts(engine_, motor - 1).position;
     return true;
   }
   if (mo.active == kNoSlot) {
@@ -672,7 +706,7 @@ bool StepScheduler::target(uint8_t motor, int32_t& out) const {
 }
 
 uint32_t StepScheduler::interval(uint8_t motor) const {
-  return is_motor(motor) ? load(engine_.lanes[motor - 1].last_interval) : 0;
+  return is_motor(motor) ? counts(engine_, motor - 1).steps.last_interval : 0;
 }
 
 uint32_t StepScheduler::rate(uint8_t motor) const {

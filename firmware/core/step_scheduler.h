@@ -24,7 +24,8 @@
 //
 // Moves. start() plans a move in the main loop, where dividing is allowed.
 //  - From rest: the move's anchor t₀ is the clock when start() runs (later if the last pulse or
-//    a DIR change needs it). Step j is at t₀ + j·I at constant rate; 10 000 steps at 100 µs
+//    a DIR change needs it, or if the first step would come less than kPickupTicks after it:
+//    a constant-rate move under 100 µs a step starts that much later). Step j is at t₀ + j·I at constant rate; 10 000 steps at 100 µs
 //    (4 800 ticks) put the last rising edge exactly 48 000 000 ticks (1.000 s) after t₀.
 //  - A move for a running motor replaces its move at the handover step h: the first step not
 //    yet in the ring. The ring reaches `handover_lead` ahead of the clock (at least one step),
@@ -60,6 +61,15 @@ namespace hmc::fw {
 
 inline constexpr uint32_t kStepLowTicks = 96;   // 2 µs: the shortest STEP low time allowed
 inline constexpr uint32_t kDirGuardTicks = 10;  // 208 ns
+// A move from rest has its first step at least this long after start() reads the clock: the
+// ring's first fill and the interrupt's taking it come first (on the image, from the clock's
+// read to the compare armed, ≈ 3 400 ticks with the planning, which now comes before the read).
+// Anchored at the clock alone, a 20 µs move's first steps were already past when the interrupt
+// took them: it raised them back to back, too close to be pulses at all.
+inline constexpr uint32_t kPickupTicks = 4800;  // 100 µs
+// From rest at up to this acceleration (steps/s²) the first step comes √(2/a) s ≥ kPickupTicks
+// after the anchor (2·48 000 000² / 4 800²).
+inline constexpr uint32_t kPickupAccel = 200000000;
 
 enum class StepStatus : uint8_t {
   kOk,
@@ -94,8 +104,9 @@ class StepScheduler {
   // Main loop: tops the rings up to the lead ahead of the clock.
   void fill();
 
-  // The step timer's interrupt over the HAL interfaces (the simulator, the tests). The SAMD21
-  // runs run_step_interrupt() on engine() with its own register port instead.
+  // The step timer's interrupt over the HAL interfaces (the simulator, the tests): each lane's
+  // interrupt whose compare is due or whose request is pending. The SAMD21 runs
+  // run_lane_interrupt() on engine() from each motor's own compare interrupt instead.
   void on_step_timer();
   StepEngine& engine() { return engine_; }
 
@@ -167,7 +178,8 @@ class StepScheduler {
   StepStatus plan_and_post(uint8_t motor, const MoveSpec* move);
   void sync(uint8_t index);
   void produce(uint8_t index);
-  void begin_from_rest(uint8_t index, uint8_t slot, hal::Ticks now);
+  void begin_from_rest(uint8_t index, uint8_t slot, hal::Ticks soonest);
+  hal::Ticks soonest_start(const Profile& profile) const;
   void begin_profile(Motor& mo, uint8_t slot, hal::Ticks anchor);
   void finish(uint8_t index);
   bool next_run(Motor& mo, uint32_t most, hal::Ticks& first, uint32_t& count);

@@ -186,6 +186,15 @@ class Ideal {
   long double t_ = 0;
 };
 
+// The anchor of a move from rest started at `now` (as step_scheduler.h says: its first step at
+// least kPickupTicks after `now`).
+Ticks anchor_after(Ticks now, uint32_t interval, uint32_t accel) {
+  using hmc::fw::kPickupAccel;
+  using hmc::fw::kPickupTicks;
+  const uint32_t first = accel == 0 ? interval : accel <= kPickupAccel ? kPickupTicks : 0;
+  return now + (first < kPickupTicks ? kPickupTicks - first : 0);
+}
+
 // Largest |actual − ideal| over the steps, with the anchor at tick `anchor`.
 long double worst_error(const std::vector<Ticks>& rises, Ticks anchor, const Ideal& ideal) {
   long double worst = 0;
@@ -324,7 +333,8 @@ TEST_CASE("ramped moves from rest: every step within one tick of the ideal") {
     bench.run_out();
     const std::vector<Ticks> rises = bench.rises(1);
     REQUIRE(rises.size() == c.steps);
-    const long double worst = worst_error(rises, 777, Ideal(c.accel, c.interval, c.steps));
+    const long double worst =
+        worst_error(rises, anchor_after(777, c.interval, c.accel), Ideal(c.accel, c.interval, c.steps));
     CHECK(worst <= kTolerance);
     overall = std::max(overall, worst);
     CHECK(bench.sched.position(1) == static_cast<int32_t>(c.steps * 256));
@@ -748,12 +758,14 @@ TEST_CASE("the fastest and slowest rates, and three motors at the spec's 20 us f
     for (uint8_t m = 1; m <= 3; ++m) {
       REQUIRE(bench.sched.start(m, move(false, 0, 960, 0, 8)) == StepStatus::kOk);
     }
-    bench.run_until(48000000 + 100);
+    const Ticks anchor = anchor_after(0, 960, 0);  // 100 µs before the first step
+    bench.run_until(anchor + 48000000 + 100);
     for (uint8_t m = 1; m <= 3; ++m) {
       const std::vector<Ticks> rises = bench.rises(m);
       REQUIRE(rises.size() >= 50000);
-      for (size_t i = 0; i < 50000; ++i) REQUIRE(rises[i] == 960 * (i + 1));
-      CHECK(bench.rises(m, 960).size() - bench.rises(m, 960 + 48000000).size() == 50000);
+      for (size_t i = 0; i < 50000; ++i) REQUIRE(rises[i] == anchor + 960 * (i + 1));
+      CHECK(bench.rises(m, anchor + 960).size() - bench.rises(m, anchor + 960 + 48000000).size() ==
+            50000);
     }
     bench.sched.halt_all();
     bench.run_out();
@@ -767,7 +779,8 @@ TEST_CASE("the fastest and slowest rates, and three motors at the spec's 20 us f
     bench.run_out();
     const std::vector<Ticks> r1 = bench.rises(1);
     REQUIRE(r1.size() == 20000);
-    for (size_t i = 0; i < r1.size(); ++i) REQUIRE(r1[i] == 240 * (i + 1));
+    const Ticks anchor = anchor_after(0, 240, 0);
+    for (size_t i = 0; i < r1.size(); ++i) REQUIRE(r1[i] == anchor + 240 * (i + 1));
     CHECK(worst_error(bench.rises(2), 0, Ideal(4000000, 240, 20000)) <= kTolerance);
     CHECK(worst_error(bench.rises(3), 0, Ideal(1000000, 240, 20000)) <= kTolerance);
     check_pulses(bench);

@@ -11,7 +11,7 @@ namespace hmc::grbl::detail {
 
 inline constexpr double kMmPerInch = 25.4;
 // Rates: every motor's under the board's budget for motors stepping at once while one ramps
-// (protocol_facts.h: 80 000 steps/s; 100 000 at constant rate).
+// (protocol_facts.h: 150 000 steps/s, the same as at constant rate).
 inline constexpr double kRampBudget = proto::kMaxRampingStepRate;
 inline constexpr double kFlatBudget = proto::kMaxStepRate;
 // Without a profile speed or acceleration: one turn of a 200-step motor at 1/16 per second, and

@@ -434,20 +434,27 @@ TEST_CASE("the board's rate budget") {
     }
     return file(steps, three);
   };
-  // This firmware (protocol_facts.h: 100 000 steps/s, 80 000 while any moving motor ramps):
-  // two motors at the spec's fastest, 20 us a step (50 000 steps/s each), fit; a third does not.
-  CHECK(plan_motion(running({{50000, false}, {50000, false}}), {}).ok());
-  auto r = plan_motion(running({{50000, false}, {50000, false}, {50000, false}}), {});
-  REQUIRE(!r.ok());
-  CHECK(r.error()[0].message.find(std::to_string(proto::kMaxStepRate)) != std::string::npos);
-  // 40 000 + 40 000 at constant rate and a third motor ramping to 1 000: 81 000 is within the
-  // constant-rate budget but not within the ramping one; 40 000 + 25 000 + 1 000 is.
-  r = plan_motion(running({{40000, false}, {40000, false}, {1000, true}}), {});
-  REQUIRE(!r.ok());
-  CHECK(r.error()[0].message.find(std::to_string(proto::kMaxRampingStepRate)) != std::string::npos);
-  CHECK(plan_motion(running({{40000, false}, {25000, false}, {1000, true}}), {}).ok());
+  // This firmware (protocol_facts.h: 150 000 steps/s, ramping or not): every motor at the spec's
+  // fastest, 20 us a step (50 000 steps/s each, the most a motor may go), fits, ramping too.
+  static_assert(proto::kMaxStepRate == 150000 && proto::kMaxRampingStepRate == 150000, "");
+  CHECK(plan_motion(running({{50000, false}, {50000, false}, {50000, false}}), {}).ok());
+  CHECK(plan_motion(running({{50000, true}, {50000, true}, {50000, true}}), {}).ok());
 
-  // A board of the firmware before (VER: 75 000, 40 000 while ramping) is held to its own.
+  // A board of the firmware before (VER: 100 000, 80 000 while ramping): two motors at 20 us fit,
+  // a third does not; 40 000 + 40 000 at constant rate and a third motor ramping to 1 000: 81 000
+  // is within the constant-rate budget but not within the ramping one; 40 000 + 25 000 + 1 000 is.
+  PlanOptions before;
+  before.budgets = StepBudgets{100000, 80000};
+  CHECK(plan_motion(running({{50000, false}, {50000, false}}), before).ok());
+  auto r = plan_motion(running({{50000, false}, {50000, false}, {50000, false}}), before);
+  REQUIRE(!r.ok());
+  CHECK(r.error()[0].message.find("100000") != std::string::npos);
+  r = plan_motion(running({{40000, false}, {40000, false}, {1000, true}}), before);
+  REQUIRE(!r.ok());
+  CHECK(r.error()[0].message.find("80000") != std::string::npos);
+  CHECK(plan_motion(running({{40000, false}, {25000, false}, {1000, true}}), before).ok());
+
+  // An older board still (VER: 75 000, 40 000 while ramping) is held to its own.
   PlanOptions older;
   older.budgets = StepBudgets{75000, 40000};
   // One motor ramping on the board at 45 000: above the 40 000 allowed while ramping.

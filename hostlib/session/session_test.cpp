@@ -125,6 +125,13 @@ class OlderBoardTransport : public hmc::Transport {
         pending_ += hmc::encode_board_frame(hmc::Nak{Reason::kOutOfRange, 3, 10}).value() + "\n";
         return hmc::Done{};
       }
+      if (const auto* move = std::get_if<hmc::StepperMove>(&sent->command);
+          move && move->motor == over_budget_motor) {
+        // Over this board's step budget: rate_limit on the delay (token 7, byte 18 for a
+        // two-digit microstep).
+        pending_ += hmc::encode_board_frame(hmc::Nak{Reason::kRateLimit, 7, 18}).value() + "\n";
+        return hmc::Done{};
+      }
     }
     return inner_->write(bytes);
   }
@@ -145,6 +152,7 @@ class OlderBoardTransport : public hmc::Transport {
     return std::any_of(writes.begin(), writes.end(), [&](const std::string& w) { return w.rfind(prefix, 0) == 0; });
   }
   std::vector<std::string> writes;
+  uint32_t over_budget_motor = 0;  // its moves are refused as over the budget (0: none)
 
  private:
   std::string rewrite(const std::string& line) const {
@@ -331,6 +339,31 @@ TEST_CASE("a move toward a pressed switch is refused from the model") {
   CHECK(again.error().reason == Reason::kLimitPressed);
   CHECK(again.error().message.find("reverse end is pressed") != std::string::npos);
   CHECK(s->execute(StepperMove{1, kFwd, 1, 10, 100}).ok());  // away from it is fine
+}
+
+TEST_CASE("an older board's refusal of a move over its step budget comes back with the sum and the budget") {
+  // A protocol-6 board ramps at most 40 000 steps/s in all (this firmware's 150 000 cannot be
+  // exceeded by three motors at their max_rate): motor 3 at the spec's 20 us (50 000) at
+  // constant rate fits its 150 000; motor 1 ramping beside it does not fit the 40 000, and the
+  // board's refusal comes back with the sum and the budget.
+  StateDir dir;
+  Recorder rec;
+  auto raw = new OlderBoardTransport(sim("sim://?fast"), 6);
+  raw->over_budget_motor = 1;  // as that board refuses motor 1's move below
+  auto opened = Session::open(std::unique_ptr<hmc::Transport>(raw), rec.options());
+  REQUIRE(opened.ok());
+  auto& s = opened.value();
+  REQUIRE(s->execute(StepperMove{3, kFwd, 8, 0, 20}).ok());
+  REQUIRE(s->execute(hmc::SetSetting{1, hmc::proto::kSettingAccel, 8000}).ok());
+  auto over = s->execute(StepperMove{1, kFwd, 16, 1000, 30});
+  REQUIRE_FALSE(over.ok());
+  CHECK(over.error().kind == SessionError::Kind::kNak);
+  CHECK(over.error().reason == Reason::kRateLimit);
+  CHECK(over.error().message.find("motor 1 would step at 33334 steps/s") != std::string::npos);
+  CHECK(over.error().message.find("motor 3 at 50000 now") != std::string::npos);
+  CHECK(over.error().message.find("83334 steps/s or more together, above its budget while any moving motor "
+                                  "ramps, 40000 steps/s (150000 at constant rate)") != std::string::npos);
+  REQUIRE(s->stop_all().ok());
 }
 
 TEST_CASE("a line the board refuses comes back explained") {

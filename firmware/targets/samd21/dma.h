@@ -1,7 +1,7 @@
 // The SAMD21 DMA controller: the LED strips' byte transfers from a RAM buffer to a SERCOM's data
 // register, one beat per trigger, polled for completion (no interrupt; channels 0 and 1), and
 // the STEP pulses' endless one-word transfers on the step timer's compares (step_pulses.h;
-// channels 2 to 4). Channel registers are reached through the shared CHID selector, so every
+// channels 2 to 10). Channel registers are reached through the shared CHID selector, so every
 // call belongs to the main loop (or to start-up, before interrupts are on).
 #pragma once
 
@@ -9,7 +9,7 @@
 
 namespace hmc::samd21 {
 
-inline constexpr uint32_t kDmaChannels = 5;
+inline constexpr uint32_t kDmaChannels = 11;
 
 // Resets and enables the DMAC (every priority level); first, before any channel is started.
 void dma_init();

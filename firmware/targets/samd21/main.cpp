@@ -1,7 +1,9 @@
 // The SAMD21 firmware's entry: wires the board's HAL objects (this directory) into fw::Board,
-// runs the Controller, and routes the three interrupts the firmware uses.
+// runs the Controller, and routes the interrupts the firmware uses.
 //
-//   irq_tc4      step timer, priority 0   → the step engine's fast path (step_fast_path.h), in RAM
+//   irq_tc4      motor 1's step compare (and the step clock), priority 0 → the step engine's
+//   irq_tcc1     motor 2's step compare, priority 0                       lanes
+//   irq_tcc2     motor 3's step compare, priority 0                       (step_fast_path.h), in RAM
 //   irq_sercom5  command UART, priority 1 → receive ring / transmit ring
 //   irq_eic      switches, priority 2     → Controller::on_switch_change()
 //
@@ -58,8 +60,28 @@ volatile samd21::ClockSource clock_source;
 // In RAM (.ramfunc, samd21_sections.ld): no flash wait states on the step path. -O2 here (the
 // rest is -Os): the common path then branches less and spills less (one motor: 205 cycles a step
 // against 222 at -Os when it was set, scripts/bench cycles), for ≈ 1 KiB more RAM code.
+// Each lane's full entry, called when its express entry declines (GCC ignores a section on a
+// template function: these are not templates).
+__attribute__((section(".ramfunc.step_general_1"), noinline, optimize("O2"))) void step_general_1() {
+  samd21::run_step_general<0>(step_timer, controller.step_engine());
+}
+__attribute__((section(".ramfunc.step_general_2"), noinline, optimize("O2"))) void step_general_2() {
+  samd21::run_step_general<1>(step_timer, controller.step_engine());
+}
+__attribute__((section(".ramfunc.step_general_3"), noinline, optimize("O2"))) void step_general_3() {
+  samd21::run_step_general<2>(step_timer, controller.step_engine());
+}
+
 extern "C" __attribute__((section(".ramfunc.irq_tc4"), optimize("O2"))) void irq_tc4() {
-  samd21::run_step_fast_path(step_timer, controller.step_engine());
+  if (!samd21::run_step_express<0>(step_timer, controller.step_engine())) step_general_1();
+}
+
+extern "C" __attribute__((section(".ramfunc.irq_tcc1"), optimize("O2"))) void irq_tcc1() {
+  if (!samd21::run_step_express<1>(step_timer, controller.step_engine())) step_general_2();
+}
+
+extern "C" __attribute__((section(".ramfunc.irq_tcc2"), optimize("O2"))) void irq_tcc2() {
+  if (!samd21::run_step_express<2>(step_timer, controller.step_engine())) step_general_3();
 }
 
 extern "C" void irq_sercom5() { serial_port.on_interrupt(); }

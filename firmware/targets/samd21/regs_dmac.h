@@ -26,8 +26,12 @@ constexpr uint32_t chctrlb_beat_trigger(uint32_t trigger, uint32_t level = 0) {
   return ((level & 3u) << 5) | ((trigger & 0x3Fu) << 8) | (2u << 22);
 }
 constexpr uint32_t sercom_tx_trigger(uint32_t sercom) { return 2u * sercom + 2u; }
-// TRIGSRC of the step timer's compare matches (datasheet "DMAC", CHCTRLB.TRIGSRC table: TC4 OVF
-// 0x1B, TC4 MC0 0x1C, TC4 MC1 0x1D).
+// TRIGSRC of the step compares' matches (datasheet "DMAC", CHCTRLB.TRIGSRC table: TCC1 OVF 0x12,
+// MC0 0x13, MC1 0x14; TCC2 OVF 0x15, MC0 0x16, MC1 0x17; TC4 OVF 0x1B, MC0 0x1C, MC1 0x1D).
+inline constexpr uint32_t kTriggerTcc1Mc0 = 0x13;
+inline constexpr uint32_t kTriggerTcc1Mc1 = 0x14;
+inline constexpr uint32_t kTriggerTcc2Mc0 = 0x16;
+inline constexpr uint32_t kTriggerTcc2Mc1 = 0x17;
 inline constexpr uint32_t kTriggerTc4Mc0 = 0x1C;
 inline constexpr uint32_t kTriggerTc4Mc1 = 0x1D;
 

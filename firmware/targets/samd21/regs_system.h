@@ -24,6 +24,8 @@ inline constexpr uint32_t kApbBPort = 1u << 3;
 inline constexpr uint32_t kApbBDmac = 1u << 4;
 inline constexpr uint32_t kApbCSercom0 = 1u << 2;  // SERCOMn: bit 2 + n (HARDWARE.md)
 inline constexpr uint32_t kApbCTcc0 = 1u << 8;
+inline constexpr uint32_t kApbCTcc1 = 1u << 9;
+inline constexpr uint32_t kApbCTcc2 = 1u << 10;
 inline constexpr uint32_t kApbCTc3 = 1u << 11;
 inline constexpr uint32_t kApbCTc4 = 1u << 12;
 inline constexpr uint32_t kApbCTc5 = 1u << 13;
@@ -170,6 +172,8 @@ inline constexpr uint32_t kEic = 4;
 inline constexpr uint32_t kDmac = 6;
 inline constexpr uint32_t kSercom0 = 9;
 inline constexpr uint32_t kTcc0 = 15;
+inline constexpr uint32_t kTcc1 = 16;
+inline constexpr uint32_t kTcc2 = 17;
 inline constexpr uint32_t kTc3 = 18;
 inline constexpr uint32_t kTc4 = 19;
 }  // namespace irqn

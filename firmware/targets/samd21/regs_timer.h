@@ -39,11 +39,15 @@ inline constexpr uint32_t kSyncBusy = 1u << 7;
 
 namespace tcc {
 inline constexpr uint32_t kTcc0 = 0x42002000;
+inline constexpr uint32_t kTcc1 = 0x42002400;  // 24-bit counter, CC0 and CC1
+inline constexpr uint32_t kTcc2 = 0x42002800;  // 16-bit counter, CC0 and CC1
 // Offsets.
 inline constexpr uint32_t kCtrlA = 0x00;
 inline constexpr uint32_t kCtrlBSet = 0x05;  // 8-bit: CMD 7:5
 inline constexpr uint32_t kSyncBusy = 0x08;
-inline constexpr uint32_t kIntFlag = 0x2C;   // OVF 0 (write 1 to clear)
+inline constexpr uint32_t kIntEnClr = 0x24;
+inline constexpr uint32_t kIntEnSet = 0x28;
+inline constexpr uint32_t kIntFlag = 0x2C;   // OVF 0, MC0 16, MC1 17 (write 1 to clear)
 inline constexpr uint32_t kCount = 0x34;     // 24 bits
 inline constexpr uint32_t kWave = 0x3C;
 inline constexpr uint32_t kPer = 0x40;
@@ -57,6 +61,8 @@ constexpr uint32_t prescaler(uint32_t code) { return (code & 7u) << 8; }  // 4 =
 // and SYNCBUSY.COUNT clear).
 inline constexpr uint8_t kCmdReadSync = 4u << 5;
 inline constexpr uint32_t kIntOvf = 1u << 0;  // a period ended (the counter wrapped to zero)
+inline constexpr uint32_t kIntMc0 = 1u << 16;  // the counter reached CC0
+inline constexpr uint32_t kIntMc1 = 1u << 17;
 // WAVE: WAVEGEN 2:0, 2 = normal (single-slope) PWM.
 inline constexpr uint32_t kWaveNpwm = 2u;
 // SYNCBUSY bits.

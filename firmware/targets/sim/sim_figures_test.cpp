@@ -204,9 +204,10 @@ TEST_CASE("the emergency switch leaves no step edge after it") {
   std::printf("summary: | emergency stop, 3 motors running | %zu step edges after the switch | %zu before | "
               "halted in the switch interrupt | 0 after |\n",
               after, before);
-  // 250 ms at 20 000, ramping to 10 000 (625 steps), and 10 000 steps/s: 8 125 steps.
+  // 250 ms at 20 000 (its first step 100 µs after the frame, kPickupTicks: 4 999 steps), ramping
+  // to 10 000 (625 steps), and 10 000 steps/s (2 500): 8 124 steps.
   REQUIRE(trace.steps.size() == 3);
-  CHECK(before == 8125);
+  CHECK(before == 8124);
   // The rule allows the one edge in flight; the simulated interrupt halts within the event.
   CHECK(after == 0);
 }

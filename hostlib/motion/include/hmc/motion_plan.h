@@ -37,7 +37,8 @@
 //    acceleration chosen together), so that it ends within 10 µs of E: within one step period
 //    of every other motor. When that shape cannot be stretched, stages, then one rate.
 //  - Rates: every stage at most 50 000 steps/s and at least one step per 89 s; the rates of
-//    motors stepping at once at most 50 000 steps/s in all, 40 000 while any of them ramps.
+//    motors stepping at once within the board's budgets (VER: 150 000 steps/s in all on this
+//    firmware, ramping or not; an older board's own).
 #pragma once
 
 #include <cstdint>
