@@ -602,19 +602,24 @@ HMC_STEP_INLINE void run_lane_general(StepEngine& engine, Port& port) {
       if (fired) port.ack_event();
       return;
     }
+    // The armed event may have come: it is taken as made, before a halt could drop it
+    // uncounted. Its compare's flag tells, not the clock (a lane's timer and the clock agree only
+    // to its offset's measure), read just before the disarm and just after. Set before: the
+    // hardware raised STEP, perhaps long ago, and raising it again would be a second step. Set
+    // only after: the match came a few cycles ago, about the disarm, and may have found the mask
+    // 0: the CPU raises STEP at once, which a STEP the hardware did raise, still high then, does
+    // not see as a second edge.
+    const bool before = compare == kCompareEvent && port.event_fired(e);
     port.disarm();
     if (Port::kArmedStepsByHardware) {
+      const bool came = before || (compare == kCompareEvent && port.event_fired(e));
+      if (came && !before && (e.stepping & bit) != 0) port.step_high(e.lanes[i].next);
       // The compare is moved to now (past once live, and a whole counter's wrap from matching
       // again: a parked compare comes round every 2^16 ticks on a 16-bit timer), so nothing the
-      // hardware does at it can touch a pulse this entry makes. Its event may have come before,
-      // STEP raised by the hardware: it is taken as made (its pulse's end set from now), before
-      // a halt could drop it uncounted.
+      // hardware does at it can touch a pulse this entry makes.
       now = port.take_entry();
       port.park(now);
-      if (compare == kCompareEvent && static_cast<int32_t>(e.lanes[i].next - now) <= 0) {
-        if ((e.stepping & bit) != 0) port.step_high(now);
-        step_lane(e, port, i);
-      }
+      if (came) step_lane(e, port, i);
     }
     lane.compare = kCompareIdle;
     store8(lane.pending, 0);

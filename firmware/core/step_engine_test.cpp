@@ -36,12 +36,19 @@ struct ClockPortOf {
   uint32_t armed = 0;
   bool armed_steps = false;
   bool entered_by_compare = false;  // entered by the compare arm() set
+  bool matches_at_disarm = false;   // the armed compare matches as the interrupt disarms it
+  bool matched_at_disarm = false;
   std::vector<uint32_t> rises;  // the time of each STEP rise
   // One letter a port call: F the armed STEP's end, H high, A ack, D disarm, E entry, W wait,
   // M arm.
   std::string calls;
 
-  bool event_fired(const StepEngine&) const { return entered_by_compare; }
+  // The compare's flag: set by the compare that brought the entry, by the armed time once
+  // passed, or by a match that comes just as the interrupt disarms it (matches_at_disarm).
+  bool event_fired(const StepEngine&) const {
+    return entered_by_compare || matched_at_disarm ||
+           (armed != 0 && static_cast<int32_t>(clock - armed) >= 0);
+  }
   void ack_event() { calls += 'A'; }
   void fired(uint32_t when) {
     calls += 'F';
@@ -51,6 +58,7 @@ struct ClockPortOf {
   void disarm() {
     calls += 'D';
     armed_steps = false;
+    matched_at_disarm = matches_at_disarm;
   }
   void park(uint32_t now) {
     calls += 'P';
@@ -337,10 +345,19 @@ TEST_CASE("step interrupt: derived counts equal per-step counters mid-segment, a
 
 TEST_CASE("step interrupt: a kick after the armed compare counts the step the hardware made") {
   // Motor 1 steps every 960 ticks from 10 000; the main loop asks for a halt at the next step's
-  // time. Where the compare matched before the kick was taken, the hardware raised STEP: the
-  // step is counted and its pulse given an end before the halt drops the move. Where the kick
-  // came first, the compare raises nothing (disarmed) and the step is not made.
-  for (const uint32_t kick_at : {uint32_t{10970}, uint32_t{10950}}) {
+  // time. Where the compare matched before the kick was taken (its flag set at entry), the
+  // hardware raised STEP: the step is counted before the halt drops the move, and no STEP is
+  // raised again (its pulse may be over: that would be a second step). Where it matched as the
+  // interrupt disarmed it (the flag set only after the disarm), its STEP may have found the mask
+  // 0: counted and raised by the CPU (no second edge if the hardware did raise it). Where the
+  // kick came first, the compare raises nothing (disarmed) and the step is not made.
+  struct Kick {
+    uint32_t at;
+    bool matches_at_disarm;
+  };
+  for (const Kick kick : {Kick{10970, false}, Kick{11300, false}, Kick{10955, true},
+                          Kick{10950, false}}) {
+    const uint32_t kick_at = kick.at;
     StepEngine e{};
     hmc::fw::StepLane& lane = e.lanes[0];
     lane.ring[0] = StepSegment{10000, 1, 16, hmc::fw::kSegStart, 0, 0};
@@ -358,16 +375,25 @@ TEST_CASE("step interrupt: a kick after the armed compare counts the step the ha
     lane.halt_request = 0x80 | 1;
     lane.pending = 1;
     port.clock = kick_at;
+    port.entered_by_compare = false;
+    port.matches_at_disarm = kick.matches_at_disarm;
     port.calls.clear();
     hmc::fw::run_lane_interrupt(e, port);
     INFO("kick at " << kick_at << ": " << port.calls);
-    CHECK(port.calls.rfind("DEP", 0) == 0);  // disarmed first, the clock, the compare parked
-    CHECK(!port.armed_steps);               // nothing armed after the halt
-    CHECK(port.armed == kick_at);           // the compare parked at the kick's clock
+    CHECK(!port.armed_steps);  // nothing armed after the halt
     CHECK(lane.moving == 0);
+    if (kick.matches_at_disarm) {
+      CHECK(lane.total == 2);
+      // Disarmed first, STEP raised by the CPU at once, the clock, the compare parked there.
+      CHECK(port.calls.rfind("DHEP", 0) == 0);
+      CHECK(port.armed == kick_at + ClockPort::kCallTicks);
+      continue;
+    }
+    CHECK(port.calls.rfind("DEP", 0) == 0);  // disarmed first, the clock, the compare parked
+    CHECK(port.armed == kick_at);           // the compare parked at the kick's clock
     if (kick_at >= 10960) {
       CHECK(lane.total == 2);
-      CHECK(port.calls.rfind("DEPH", 0) == 0);  // the pulse's end, from now
+      CHECK(port.calls.find('H') == std::string::npos);  // no second step
     } else {
       CHECK(lane.total == 1);
       CHECK(port.calls.find('H') == std::string::npos);
