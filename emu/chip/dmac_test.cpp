@@ -328,6 +328,36 @@ TEST_CASE("TCC2 is 16 bits: CC0 behind the count matches after the wrap, a CC of
   CHECK(b.chip.violation_message().empty());
 }
 
+TEST_CASE("a CC write after a beat that ran ahead over the wrap: modelled unless it matched in between") {
+  // TCC2's CC0 matches 4 ticks before the wrap; the DMAC's beat on it (CC0's end copied into
+  // CC1) lands 5 cycles later, after the wrap, and has the timer handle the wrap then. The CPU,
+  // a tick after the match, writes CC0 again: for the next period's tick 1000 (as the step
+  // interrupt re-arms), which is modelled; or for a tick of the old period still ahead of the
+  // CPU, which would have matched before the wrap already handled, and is not.
+  TccBench b(2, 0xFFFF);
+  constexpr uint32_t kEnd = kRam + 0x208;
+  b.ram.word(kEnd, 5000);
+  b.channel(2, 0x16, kEnd, b.base + 0x48);  // TCC2 MC0 → CC1
+  b.tcc(0x44, 0xFFFC);
+  b.run_to(0xFFFD);
+  REQUIRE(b.chip.violation_message().empty());
+  REQUIRE(b.reg(0x48) == 5000);  // the beat ran
+  SECTION("a value for the next period") {
+    b.tcc(0x2C, kMc0);
+    b.tcc(0x44, 1000);
+    CHECK(b.chip.violation_message().empty());
+    b.run_to((1u << 16) + 1000, 1);
+    CHECK((b.reg(0x2C) & kMc0) == 0);
+    b.run_to((1u << 16) + 1000);
+    CHECK((b.reg(0x2C) & kMc0) != 0);
+  }
+  SECTION("a value that would have matched before the wrap") {
+    b.tcc(0x44, 0xFFFE);
+    CHECK(b.chip.violation_message().find("matches before the timer's last handled event") !=
+          std::string::npos);
+  }
+}
+
 TEST_CASE("what the DMAC model does not cover stops the emulator, naming it") {
   StepBench b;
   SECTION("a trigger action other than one beat") {
