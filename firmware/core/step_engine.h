@@ -65,8 +65,8 @@
 // Ring protocol (one core, no locks): the main loop writes a segment, then advances `tail`; the
 // interrupt reads a segment, then advances `head`. A motor whose ring ran dry while moving waits
 // (not armed) and counts a starved event; the main loop's next push re-arms it through the
-// lane's `pending`. A halt empties the ring in the interrupt; segments the main loop pushes afterwards
-// that do not start a move are dropped.
+// lane's `pending`. A halt empties the ring in the interrupt; segments the main loop pushes
+// afterwards that do not start a move are dropped.
 //
 // Code placement: on the board (ARMv6-M) the per-event code goes to .ramfunc, which the linker
 // script puts in RAM (no flash wait states; samd21_sections.ld); HMC_STEP_INLINE forces the
@@ -187,8 +187,8 @@ static_assert(offsetof(StepLane, compare) == 0 && offsetof(StepLane, flags) == 1
 // lanes' interrupts share one priority (none preempts another), so the masks below, written by
 // each for its own bit, need no lock.
 struct StepEngine {
-  // Per motor (bit i for lane i): the lane's `next` is a pending event; its segment steps (not a DIR
-  // change, not a wait).
+  // Per motor (bit i for lane i): the lane's `next` is a pending event; its segment steps (not
+  // a DIR change, not a wait).
   uint8_t armed;
   uint8_t stepping;
   uint32_t starved;    // events that found their ring empty (0 when the main loop keeps up)
@@ -288,9 +288,9 @@ HMC_STEP_INLINE void ramp_step(StepLane& lane, uint32_t at) {
   lane.left = 1;
 }
 
-// Starts playing ramp segment `seg` after the event at `at`.
-HMC_STEP_INLINE void begin_ramp(StepLane& lane, const StepSegment& seg,
-                                uint32_t at) {
+// Starts playing ramp segment `seg` after the event at `at` (the lane folded before it).
+HMC_STEP_INLINE void begin_ramp(StepLane& lane, const StepSegment& seg, uint32_t at) {
+  lane.count = seg.count;
   lane.fraction = static_cast<uint16_t>(seg.position_step);
   lane.interval = seg.interval;
   lane.add = seg.add;
@@ -304,7 +304,7 @@ HMC_STEP_INLINE void begin_ramp(StepLane& lane, const StepSegment& seg,
 HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
   StepLane& lane = e.lanes[i];
   const uint8_t bit = uint8_t(1u << i);
-  fold_steps(lane, e.lanes[i].next);
+  fold_steps(lane, lane.next);
   for (;;) {
     const uint8_t head = lane.head;
     if (head == load8(lane.tail)) {
@@ -319,7 +319,7 @@ HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
       lane.moving = 1;
       fold_position(lane, seg.position_step);
       lane.fired_from = lane.total;
-      e.lanes[i].next = seg.interval;
+      lane.next = seg.interval;
       lane.last_step = seg.interval;
     } else if ((flags & kSegEnd) != 0) {
       if (lane.moving != 0 && seg.end != 0) {
@@ -336,7 +336,6 @@ HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
       store8(lane.head, static_cast<uint8_t>(head + 1));
       continue;
     } else if ((flags & kSegRamp) != 0) {
-      lane.count = seg.count;
       begin_ramp(lane, seg, lane.next);
       lane.flags = flags;
       e.armed = uint8_t(e.armed | bit);
@@ -345,7 +344,7 @@ HMC_STEP_RAMFUNC inline void load_segment(StepEngine& e, uint8_t i) {
       store8(lane.head, static_cast<uint8_t>(head + 1));
       return;
     } else {
-      e.lanes[i].next += seg.interval;
+      lane.next += seg.interval;
       if ((flags & kSegMove) != 0) {
         fold_position(lane, seg.position_step);
         lane.fired_from = lane.total;
@@ -377,7 +376,7 @@ HMC_STEP_RAMFUNC inline void take_lane_requests(StepEngine& e, uint8_t i) {
     store8(lane.halt_request, 0);
     const uint8_t upto = load8(lane.halt_upto);
     if (static_cast<uint8_t>(upto - lane.head) <= kRingSize) store8(lane.head, upto);
-    fold_steps(lane, e.lanes[i].next);  // before the rest: a halted lane's last interval is 0
+    fold_steps(lane, lane.next);  // before the rest: a halted lane's last interval is 0
     const uint8_t end = halt & 0x7Fu;
     if (lane.moving != 0 && end != 0) {
       lane.end = end;
@@ -394,7 +393,7 @@ HMC_STEP_RAMFUNC inline void take_lane_requests(StepEngine& e, uint8_t i) {
 // Lane i's due event is done (STEP raised if it steps): account for it, take the next.
 HMC_STEP_INLINE void advance(StepEngine& e, uint8_t i) {
   StepLane& lane = *based(&e.lanes[i]);
-  const uint32_t at = e.lanes[i].next;
+  const uint32_t at = lane.next;
   if (HMC_STEP_UNLIKELY(--lane.left == 0)) {
     if (lane.ramp_left != 0) {  // a ramp segment's next step
       --lane.ramp_left;
@@ -411,7 +410,7 @@ HMC_STEP_INLINE void advance(StepEngine& e, uint8_t i) {
       // read 0 steps after 2³² of them).
       const uint32_t count = lane.count + seg.count;
       if (seg.flags == 0 && count >= seg.count) {
-        e.lanes[i].next = at + seg.interval;
+        lane.next = at + seg.interval;
         lane.interval = seg.interval;
         lane.count = count;
         lane.left = seg.count;
@@ -422,7 +421,7 @@ HMC_STEP_INLINE void advance(StepEngine& e, uint8_t i) {
     }
     load_segment(e, i);
   } else {
-    e.lanes[i].next = at + lane.interval;
+    lane.next = at + lane.interval;
   }
 }
 
@@ -458,7 +457,7 @@ HMC_STEP_INLINE bool arm_lane(StepEngine& e, StepLane& lane, Port& port, uint8_t
     lane.compare = kCompareIdle;
     return true;
   }
-  const uint32_t when = e.lanes[i].next;
+  const uint32_t when = lane.next;
   const int32_t ahead = port.ticks_until(when, entry, entry_mark);
   if (HMC_STEP_UNLIKELY(ahead < static_cast<int32_t>(Port::kCostTicks))) return false;
   if (HMC_STEP_UNLIKELY(beyond_reach<Port>(ahead))) {
@@ -481,10 +480,10 @@ HMC_STEP_INLINE bool arm_lane(StepEngine& e, StepLane& lane, Port& port, uint8_t
 }  // namespace step_engine_detail
 
 // The express entry: the lane's armed event came, nothing is asked of the lane, and its next
-// event steps in the same segment (a plain run's, or a ramp segment's next step) or in the plain
-// run after it, far enough ahead to arm and near enough for the compare to reach. Its STEP is the same, so only the
-// pulse's end and the compare move (Port::rearm). Decided before anything changes: false leaves
-// the entry to run_lane_general, untouched.
+// event steps in the same segment (a plain run's, or a ramp segment's next step) or in the next
+// segment of the same kind, far enough ahead to arm and near enough for the compare to reach.
+// Its STEP is the same, so only the pulse's end and the compare move (Port::rearm). Decided
+// before anything changes: false leaves the entry to run_lane_general, untouched.
 template <class Port>
 HMC_STEP_INLINE bool run_lane_express(StepEngine& engine, Port& port) {
   using namespace step_engine_detail;
@@ -503,6 +502,8 @@ HMC_STEP_INLINE bool run_lane_express(StepEngine& engine, Port& port) {
     if (HMC_STEP_LIKELY(lane.left > 1)) {
       when = at + lane.interval;
     } else {
+      // advance()'s test and work, written out in this entry's check-then-commit order (shared
+      // helpers measured a cycle a step more here: scripts/bench cycles).
       const uint8_t head = lane.head;
       if (head == load8(lane.tail)) return false;
       fence();
@@ -557,7 +558,6 @@ HMC_STEP_INLINE bool run_lane_express(StepEngine& engine, Port& port) {
     } else {
       lane.left = 0;  // the segment played out, as advance() leaves it for load_segment
       fold_steps(lane, at);
-      lane.count = run->count;
       begin_ramp(lane, *run, at);
     }
     fence();
@@ -583,7 +583,7 @@ HMC_STEP_INLINE void run_lane_general(StepEngine& engine, Port& port) {
   bool waited;
   if (HMC_STEP_LIKELY(fired && compare != kCompareIdle && load8(lane.pending) == 0)) {
     if (HMC_STEP_LIKELY(compare == kCompareEvent)) {
-      now = e.lanes[i].next;
+      now = lane.next;
       if ((e.stepping & bit) != 0) {
         port.fired(now);  // first: on the host this raises STEP
         raised = !Port::kArmedStepsByHardware;
@@ -613,7 +613,7 @@ HMC_STEP_INLINE void run_lane_general(StepEngine& engine, Port& port) {
     port.disarm();
     if (Port::kArmedStepsByHardware) {
       const bool came = before || (compare == kCompareEvent && port.event_fired(e));
-      if (came && !before && (e.stepping & bit) != 0) port.step_high(e.lanes[i].next);
+      if (came && !before && (e.stepping & bit) != 0) port.step_high(lane.next);
       // The compare is moved to now (past once live, and a whole counter's wrap from matching
       // again: a parked compare comes round every 2^16 ticks on a 16-bit timer), so nothing the
       // hardware does at it can touch a pulse this entry makes.
@@ -635,7 +635,7 @@ HMC_STEP_INLINE void run_lane_general(StepEngine& engine, Port& port) {
   while (HMC_STEP_UNLIKELY(!arm_lane(e, lane, port, i, entry, entry_mark, waited))) {
     // Due before the interrupt could return and come back: waited for, raised by the CPU.
     if (raised) port.step_low(mark);
-    const uint32_t when = e.lanes[i].next;
+    const uint32_t when = lane.next;
     port.wait_until(when, entry, entry_mark);
     raised = (e.stepping & bit) != 0;
     if (raised) port.step_high(when);

@@ -142,10 +142,8 @@ class Samd21StepPort {
   // No wait for the write's synchronisation: a later write to the timer stalls until it is done.
   HMC_STEP_INLINE void arm(uint32_t when, bool step) {
     StepLaneWords& w = *fw::step_engine_detail::based(&step_lane_words[Lane]);
-    const uint32_t at = when + offset(w);
     w.set_mask = step ? w.pin : 0;
-    w.end = (at + fw::kStepHighTicks) & kC.count_mask;
-    r32(kC.base + kC.cc0) = at & kC.count_mask;
+    rearm(when);
     if constexpr (!kC.is_tc) r32(kC.base + tcc::kIntEnSet) = tcc::kIntMc0;
   }
   HMC_STEP_INLINE void rearm(uint32_t when) {

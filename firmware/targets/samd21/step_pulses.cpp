@@ -12,7 +12,8 @@ namespace {
 
 constexpr uint8_t kGroup = board::kDrivers[0].step.group;
 static_assert(board::kDrivers[1].step.group == kGroup && board::kDrivers[2].step.group == kGroup,
-              "every STEP pin in one port group: the DMA writes one OUTSET and one OUTCLR (pin_map.h)");
+              "every STEP pin in one port group: the DMA writes one OUTSET and one OUTCLR "
+              "(pin_map.h)");
 static_assert(kDmaChannels >= kStepFirstDmaChannel + 3 * kStepDmaChannelsPerLane,
               "dma.cpp's descriptor and write-back sections hold an entry for each channel used");
 

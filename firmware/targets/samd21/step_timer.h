@@ -79,9 +79,8 @@ class StepTimer final : public hal::StepTimer {
   // Motor 1's interrupt entered by a pend or an overflow: clears both flags, counts an overflow,
   // and returns the counter (low 32 bits).
   uint32_t take_step_interrupt() {
-    const uint32_t flags = r8(tc::kTc4 + tc::kIntFlag) & (tc::kIntOvf | tc::kIntMc0);
-    r8(tc::kTc4 + tc::kIntFlag) = static_cast<uint8_t>(flags);  // write 1 to clear
-    if ((flags & tc::kIntOvf) != 0) high_ = high_ + 1u;
+    if ((r8(tc::kTc4 + tc::kIntFlag) & tc::kIntOvf) != 0) count_overflow();
+    r8(tc::kTc4 + tc::kIntFlag) = static_cast<uint8_t>(tc::kIntMc0);  // write 1 to clear
     return read_low();
   }
   // SysTick counts the same 48 MHz clock down through 24 bits: this minus SysTick is the
