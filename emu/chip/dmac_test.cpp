@@ -43,6 +43,26 @@ class Ram : public Memory {
   void word(uint32_t address, uint32_t value) { write(address, &value, 4); }
 };
 
+// The DMAC on, its descriptor and write-back sections in `ram`.
+void dmac_on(Chip& chip) {
+  chip.bus_write(kDmac + 0x34, kDescriptors, 4);
+  chip.bus_write(kDmac + 0x38, kWriteBack, 4);
+  chip.bus_write(kDmac + 0x00, 0xF02, 2);  // DMAENABLE, LVLEN0-3
+}
+
+// Channel `n` moving one word from `source` to `destination` at each trigger, for ever.
+void endless_word_channel(Chip& chip, Ram& ram, unsigned n, unsigned trigger, unsigned level,
+                          uint32_t source, uint32_t destination, uint32_t trigact = 2) {
+  const uint32_t at = kDescriptors + 16 * n;
+  ram.word(at + 0, 1u | (2u << 8) | (1u << 16));  // BTCTRL: VALID, BEATSIZE WORD; BTCNT 1
+  ram.word(at + 4, source);
+  ram.word(at + 8, destination);
+  ram.word(at + 12, at);  // DESCADDR: itself
+  chip.bus_write(kDmac + 0x3F, n, 1);
+  chip.bus_write(kDmac + 0x44, (trigger << 8) | (level << 5) | (trigact << 22), 4);
+  chip.bus_write(kDmac + 0x40, 2, 1);
+}
+
 struct StepBench {
   Chip chip{ChipOptions{}};
   Ram ram;
@@ -63,21 +83,11 @@ struct StepBench {
     chip.bus_write(kTc4 + 0x00, (2u << 2) | 2u, 2);  // ENABLE
     ram.word(kSetMask, step1);
     ram.word(kClearMask, step1 | step2);
-    chip.bus_write(kDmac + 0x34, kDescriptors, 4);
-    chip.bus_write(kDmac + 0x38, kWriteBack, 4);
-    chip.bus_write(kDmac + 0x00, 0xF02, 2);  // DMAENABLE, LVLEN0-3
+    dmac_on(chip);
   }
-  // A channel moving one word from `source` to `destination` at each trigger, for ever.
   void channel(unsigned n, unsigned trigger, unsigned level, uint32_t source, uint32_t destination,
                uint32_t trigact = 2) {
-    const uint32_t at = kDescriptors + 16 * n;
-    ram.word(at + 0, 1u | (2u << 8) | (1u << 16));  // BTCTRL: VALID, BEATSIZE WORD; BTCNT 1
-    ram.word(at + 4, source);
-    ram.word(at + 8, destination);
-    ram.word(at + 12, at);  // DESCADDR: itself
-    chip.bus_write(kDmac + 0x3F, n, 1);
-    chip.bus_write(kDmac + 0x44, (trigger << 8) | (level << 5) | (trigact << 22), 4);
-    chip.bus_write(kDmac + 0x40, 2, 1);
+    endless_word_channel(chip, ram, n, trigger, level, source, destination, trigact);
   }
   void compares(uint32_t cc0, uint32_t cc1) {
     chip.bus_write(kTc4 + 0x18, cc0, 4);
@@ -204,9 +214,7 @@ struct TccBench {
     chip.bus_write(0x40000420, chip.bus_read(0x40000420, 4) | (1u << (8 + index)), 4);  // APBCMASK
     chip.bus_write(0x40000C02, 0x4000 | (index == 2 ? 0x1B : 0x1A), 2);  // CLKCTRL: CLKEN, GEN 0
     chip.bus_write(kPort + 0x08, step, 4);  // DIRSET
-    chip.bus_write(kDmac + 0x34, kDescriptors, 4);
-    chip.bus_write(kDmac + 0x38, kWriteBack, 4);
-    chip.bus_write(kDmac + 0x00, 0xF02, 2);  // DMAENABLE, LVLEN0-3
+    dmac_on(chip);
     tcc(0x3C, 2);    // WAVE: NPWM
     tcc(0x40, per);  // PER
     origin_ps = chip.now_ps();
@@ -226,14 +234,7 @@ struct TccBench {
     chip.advance();
   }
   void channel(unsigned n, unsigned trigger, uint32_t source, uint32_t destination) {
-    const uint32_t at = kDescriptors + 16 * n;
-    ram.word(at + 0, 1u | (2u << 8) | (1u << 16));  // BTCTRL: VALID, BEATSIZE WORD; BTCNT 1
-    ram.word(at + 4, source);
-    ram.word(at + 8, destination);
-    ram.word(at + 12, at);  // DESCADDR: itself
-    chip.bus_write(kDmac + 0x3F, n, 1);
-    chip.bus_write(kDmac + 0x44, (trigger << 8) | (1u << 5) | (2u << 22), 4);  // LVL 1, BEAT
-    chip.bus_write(kDmac + 0x40, 2, 1);
+    endless_word_channel(chip, ram, n, trigger, 1, source, destination);  // level 1, one beat
   }
   const Board::Axis& axis() { return chip.board().axis(1); }
 };
